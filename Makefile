@@ -1,0 +1,44 @@
+# hapfluid — the only entry point a user needs.
+#   make          install what is missing, build
+#   make test     ... and run every test (ctest + pytest), with their summaries
+#   make run      ... and run the main job (SCENE=<name> for another scene)
+#   make bench    ... and run every benchmark, JSON under out/bench/
+#   make install  install binaries, config and systemd units (PREFIX=/usr/local)
+#   make clean    remove build/ and out/
+SHELL := /bin/bash
+BUILD ?= build
+BUILD_TYPE ?= RelWithDebInfo
+PREFIX ?= /usr/local
+SCENE ?= spoon_stirring
+DURATION ?=
+VENV := .venv
+PY := $(VENV)/bin/python
+JOBS ?= $(shell nproc)
+
+.PHONY: all deps build test test-cpp test-py run bench install clean hil
+
+all: build
+
+deps:
+	@bash scripts/install-deps.sh
+
+$(BUILD)/build.ninja: CMakeLists.txt | deps
+	@cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_INSTALL_PREFIX=$(PREFIX) >/dev/null
+
+build: deps $(BUILD)/build.ninja
+	@cmake --build $(BUILD) -j $(JOBS)
+
+test: build
+	@bash scripts/run-tests.sh $(BUILD)
+
+run: build
+	@$(PY) scripts/hapfluid.py run --build $(BUILD) --scene $(SCENE) $(if $(DURATION),--duration $(DURATION))
+
+bench: build
+	@$(PY) scripts/run_benchmarks.py --build $(BUILD) --out out/bench
+
+install: build
+	@cmake --install $(BUILD) --prefix $(PREFIX)
+
+clean:
+	rm -rf $(BUILD) out

@@ -1,0 +1,104 @@
+// A rig file describes the physical set-up: which haptic devices exist, how to reach them, the
+// limits that keep the hand safe, and how the 1 kHz loop is scheduled. Loaded once at start-up.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "hapfluid/config/types.hpp"
+
+namespace hapfluid::config {
+
+enum class DeviceKind { haptic_arm, spacemouse };
+enum class TransportKind { loopback, socketcan, hid, usb_bulk };
+// How the 1 kHz loop turns sim samples into a wrench (see rt_core/README.md).
+enum class WrenchMode { interpolate, coupling };
+// What the loop does when it cannot get SCHED_FIFO / mlockall.
+enum class RtPolicy { enforce, ignore };
+
+struct Transport {
+  TransportKind kind = TransportKind::loopback;
+  // loopback: socket path; socketcan: interface name ("can0"); hid: "vid:pid" or a /dev/hidraw path;
+  // usb_bulk: "vid:pid".
+  std::string address;
+  std::uint32_t can_node_id = 1;  // socketcan and loopback-CAN framing: the device's node id (1..15)
+  bool can_fd = false;            // socketcan: one CAN FD frame per message instead of classic frames
+  std::string framing = "can";    // loopback: which wire bytes it carries: "can", "canfd", "hid", "bulk"
+};
+
+// Device frame -> scene frame: x_scene = offset + scale * R * x_device.
+struct WorkspaceMapping {
+  Vec3 offset_m;
+  double scale = 1.0;
+  Quat rotation;
+  double force_scale = 1.0;  // scene force -> device force (after safety limits are applied in device units)
+};
+
+struct DeviceLimits {
+  double max_force_n = 10.0;                    // norm
+  double max_torque_nm = 0.5;                   // norm
+  Vec3 max_force_axis_n{10.0, 10.0, 10.0};      // per axis, absolute
+  Vec3 max_torque_axis_nm{0.5, 0.5, 0.5};
+  double max_force_rate_n_per_s = 1000.0;       // change of force per second
+  double max_torque_rate_nm_per_s = 50.0;
+  double max_stiffness_n_per_m = 2000.0;        // caps the coupling-mode K rendered at 1 kHz
+  double max_angular_stiffness_nm_per_rad = 5.0;
+  double device_damping_n_s_per_m = 2.0;        // physical damping of the arm (passivity bound)
+};
+
+struct Watchdogs {
+  double sim_stale_ms = 50.0;        // no fresh sim sample for this long -> ramp the wrench down
+  double sim_ramp_down_ms = 100.0;   // ... to zero over this long
+  double link_timeout_ms = 5.0;      // no valid frame from the device for this long -> link fault
+  double engage_threshold_n = 1.0;   // forces engage only once the commanded force is below this
+  double engage_ramp_ms = 200.0;     // then ramp in over this long
+  double device_watchdog_ms = 20.0;  // device firmware: no valid command for this long -> motors off
+};
+
+struct RigDevice {
+  std::string name;
+  DeviceKind kind = DeviceKind::haptic_arm;
+  Transport transport;
+  WorkspaceMapping mapping;
+  DeviceLimits limits;
+  Watchdogs watchdogs;
+  WrenchMode wrench_mode = WrenchMode::interpolate;
+  bool require_deadman = false;  // forces only while the enable/deadman button is held
+};
+
+struct SharedMemory {
+  std::string prefix = "hapfluid";  // segments are /<prefix>.<channel>
+  std::string group;                // owning group of the segments (mode 0660); empty: process group
+};
+
+struct RtSettings {
+  std::int64_t period_ns = 1'000'000;
+  int priority = 80;               // SCHED_FIFO priority 1..99
+  int cpu = -1;                    // CPU to pin the loop to; -1: no pinning
+  RtPolicy policy = RtPolicy::ignore;
+  SharedMemory shm;
+  std::uint32_t trace_ring_records = 65536;  // power of two
+  std::uint32_t flight_recorder_ticks = 500;
+};
+
+struct Rig {
+  std::filesystem::path file;
+  std::string name;
+  RtSettings rt;
+  std::vector<RigDevice> devices;
+
+  const RigDevice* find_device(const std::string& name) const;
+};
+
+// Throws ConfigError listing every problem in the file.
+Rig load_rig(const std::filesystem::path& file);
+Rig parse_rig(const std::string& toml_text, const std::filesystem::path& file_for_messages);
+
+const char* to_string(DeviceKind);
+const char* to_string(TransportKind);
+const char* to_string(WrenchMode);
+const char* to_string(RtPolicy);
+
+}  // namespace hapfluid::config

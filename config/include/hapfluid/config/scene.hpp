@@ -1,0 +1,119 @@
+// A scene file describes one simulation: the domain, the fluid, the rigid bodies (meshes), the
+// devices that move them (live from a rig, or scripted hands) and the virtual couplings between
+// devices and bodies. SI units throughout.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hapfluid/config/motion.hpp"
+#include "hapfluid/config/types.hpp"
+
+namespace hapfluid::config {
+
+// The domain box. Each enabled wall is a layer of boundary particles; an open top lets fluid
+// leave upward (it is then clamped by the box's extent so it can never escape the grid).
+struct Walls {
+  bool floor = true, ceiling = false;
+  bool x_min = true, x_max = true, y_min = true, y_max = true;
+};
+
+struct Domain {
+  Aabb box;  // z is up
+  Walls walls;
+  int boundary_layers = 2;  // layers of boundary particles behind each wall
+};
+
+struct FluidBlock {
+  Aabb box;
+};
+
+// Visual preset for the renderer (§5, eq. 15): colour and wavelength-dependent extinction.
+enum class FluidLook { water, batter, honey, syrup };
+
+struct Fluid {
+  double rest_density_kg_m3 = 1000.0;
+  double particle_spacing_m = 0.02;
+  double support_radius_m = 0.0;   // h; 0: derived as 2 * particle_spacing_m
+  // Pressure eq. 7: p = k (rho - rho0). Give either k directly or the speed of sound c
+  // (then k = c^2). Exactly one of them is set after loading: stiffness_pa wins.
+  double stiffness_pa = 0.0;       // k, in Pa per (kg/m^3) -> effectively m^2/s^2
+  double speed_of_sound_m_s = 0.0;
+  double viscosity_pa_s = 0.001;   // mu
+  Vec3 gravity_m_s2{0, 0, -9.81};
+  std::vector<FluidBlock> blocks;
+  FluidLook look = FluidLook::water;
+
+  double effective_stiffness() const {
+    return stiffness_pa > 0 ? stiffness_pa : speed_of_sound_m_s * speed_of_sound_m_s;
+  }
+};
+
+struct TimeStepping {
+  double dt_s = 0.0;             // fixed step; 0: from the CFL bound
+  double cfl = 0.4;              // dt = cfl * h / (c + v_max), also bounded by viscosity/force limits
+  double max_dt_s = 0.002;
+  double frame_rate_hz = 60.0;   // published frames (and batch exports); several substeps per frame
+};
+
+struct Body {
+  std::string name;
+  std::filesystem::path mesh;  // resolved against the scene file's folder
+  double scale = 1.0;
+  Pose pose;                   // pose of the mesh frame in the world
+  double density_kg_m3 = 0.0;  // one of density / mass
+  double mass_kg = 0.0;
+  double viscosity_pa_s = 0.0; // eq. 9: the body's own viscosity; 0: the fluid's
+  double sampling_spacing_m = 0.0;  // 0: the fluid particle spacing
+  bool dynamic = true;         // static bodies never move (tables, fixed containers)
+};
+
+enum class DeviceSource { rig, scripted };
+
+struct SceneDevice {
+  std::string name;
+  DeviceSource source = DeviceSource::scripted;
+  std::string rig_device;      // source = rig: the rig device's name
+  ScriptedMotion motion;       // source = scripted (also the start pose for rig devices)
+};
+
+struct Coupling {
+  std::string device;
+  std::string body;
+  Pose grasp;                  // device handle pose in the body frame (where the hand holds it)
+  double linear_stiffness_n_per_m = 500.0;
+  double linear_damping_n_s_per_m = 5.0;
+  double angular_stiffness_nm_per_rad = 5.0;
+  double angular_damping_nm_s_per_rad = 0.05;
+};
+
+struct Scene {
+  std::filesystem::path file;
+  std::string name;
+  std::string description;
+  double duration_s = 10.0;    // default length of a batch or live run
+  Domain domain;
+  Fluid fluid;
+  TimeStepping time;
+  std::vector<Body> bodies;
+  std::vector<SceneDevice> devices;
+  std::vector<Coupling> couplings;
+
+  double support_radius() const {
+    return fluid.support_radius_m > 0 ? fluid.support_radius_m : 2.0 * fluid.particle_spacing_m;
+  }
+  const Body* find_body(const std::string& name) const;
+  const SceneDevice* find_device(const std::string& name) const;
+};
+
+// Throws ConfigError listing every problem in the file. Mesh files are checked for existence
+// and readability, and bodies are checked against the domain using the mesh bounds.
+Scene load_scene(const std::filesystem::path& file);
+Scene parse_scene(const std::string& toml_text, const std::filesystem::path& file_for_messages);
+
+const char* to_string(FluidLook);
+const char* to_string(DeviceSource);
+
+}  // namespace hapfluid::config

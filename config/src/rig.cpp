@@ -1,0 +1,188 @@
+// Rig file schema and validation. docs/config-reference.md documents every key.
+#include "hapfluid/config/rig.hpp"
+
+#include <set>
+
+#include "load_toml.hpp"
+#include "toml_reader.hpp"
+
+namespace hapfluid::config {
+namespace {
+
+using detail::Reader;
+
+void positive(Reader& r, std::string_view key, double value) { r.check(key, value > 0, "must be > 0"); }
+
+Transport read_transport(Reader& r) {
+  Transport t;
+  t.kind = r.choice<TransportKind>("kind", TransportKind::loopback,
+                                   {{"loopback", TransportKind::loopback},
+                                    {"socketcan", TransportKind::socketcan},
+                                    {"hid", TransportKind::hid},
+                                    {"usb_bulk", TransportKind::usb_bulk}});
+  if (auto address = r.required_string("address")) t.address = *address;
+  r.check("address", !t.address.empty() || !r.has("address"), "must not be empty");
+  t.can_node_id = static_cast<std::uint32_t>(r.integer("can_node_id", 1));
+  r.check("can_node_id", t.can_node_id >= 1 && t.can_node_id <= 15, "must be 1..15 (4-bit node id)");
+  t.can_fd = r.boolean("can_fd", false);
+  t.framing = r.string("framing", t.kind == TransportKind::hid        ? "hid"
+                                  : t.kind == TransportKind::usb_bulk ? "bulk"
+                                  : t.can_fd                          ? "canfd"
+                                                                      : "can");
+  static const std::set<std::string> framings{"can", "canfd", "hid", "bulk"};
+  r.check("framing", framings.count(t.framing) == 1, "must be one of \"can\", \"canfd\", \"hid\", \"bulk\"");
+  if (t.kind == TransportKind::hid || t.kind == TransportKind::usb_bulk) {
+    // "vid:pid" in hex, or a device path for hid.
+    bool path = t.address.rfind("/dev/", 0) == 0;
+    bool vidpid = t.address.size() == 9 && t.address[4] == ':';
+    r.check("address", path || vidpid || t.address.empty(),
+            t.kind == TransportKind::hid ? "must be \"vid:pid\" (hex, e.g. \"1209:4f48\") or a /dev/hidraw path"
+                                         : "must be \"vid:pid\" (hex, e.g. \"1209:4f48\")");
+  }
+  r.finish();
+  return t;
+}
+
+WorkspaceMapping read_mapping(Reader& r) {
+  WorkspaceMapping m;
+  m.offset_m = r.vec3("offset_m", m.offset_m);
+  m.scale = r.number("scale", m.scale);
+  positive(r, "scale", m.scale);
+  m.rotation = r.quaternion("rotation", m.rotation);
+  m.force_scale = r.number("force_scale", m.force_scale);
+  positive(r, "force_scale", m.force_scale);
+  r.finish();
+  return m;
+}
+
+void read_limits(Reader& r, DeviceLimits& l) {
+  auto pos = [&](std::string_view key, double& value) {
+    value = r.number(key, value);
+    positive(r, key, value);
+  };
+  pos("max_force_n", l.max_force_n);
+  pos("max_torque_nm", l.max_torque_nm);
+  // Per-axis limits default to the norm limit.
+  l.max_force_axis_n = {l.max_force_n, l.max_force_n, l.max_force_n};
+  l.max_torque_axis_nm = {l.max_torque_nm, l.max_torque_nm, l.max_torque_nm};
+  l.max_force_axis_n = r.vec3("max_force_axis_n", l.max_force_axis_n);
+  l.max_torque_axis_nm = r.vec3("max_torque_axis_nm", l.max_torque_axis_nm);
+  for (auto [key, v] : {std::pair{"max_force_axis_n", l.max_force_axis_n}, {"max_torque_axis_nm", l.max_torque_axis_nm}})
+    r.check(key, v.x > 0 && v.y > 0 && v.z > 0, "every component must be > 0");
+  pos("max_force_rate_n_per_s", l.max_force_rate_n_per_s);
+  pos("max_torque_rate_nm_per_s", l.max_torque_rate_nm_per_s);
+  pos("max_stiffness_n_per_m", l.max_stiffness_n_per_m);
+  pos("max_angular_stiffness_nm_per_rad", l.max_angular_stiffness_nm_per_rad);
+  l.device_damping_n_s_per_m = r.number("device_damping_n_s_per_m", l.device_damping_n_s_per_m);
+  r.check("device_damping_n_s_per_m", l.device_damping_n_s_per_m >= 0, "must be >= 0");
+}
+
+void read_watchdogs(Reader& r, Watchdogs& w) {
+  auto pos = [&](std::string_view key, double& value) {
+    value = r.number(key, value);
+    positive(r, key, value);
+  };
+  pos("sim_stale_ms", w.sim_stale_ms);
+  pos("sim_ramp_down_ms", w.sim_ramp_down_ms);
+  pos("link_timeout_ms", w.link_timeout_ms);
+  pos("engage_threshold_n", w.engage_threshold_n);
+  pos("engage_ramp_ms", w.engage_ramp_ms);
+  pos("device_watchdog_ms", w.device_watchdog_ms);
+}
+
+RigDevice read_device(Reader& r) {
+  RigDevice d;
+  if (auto name = r.required_string("name")) d.name = *name;
+  d.kind = r.choice<DeviceKind>("kind", DeviceKind::haptic_arm,
+                                {{"haptic_arm", DeviceKind::haptic_arm}, {"spacemouse", DeviceKind::spacemouse}});
+  if (auto t = r.table("transport")) {
+    d.transport = read_transport(*t);
+  } else {
+    r.problem("transport", "missing (a [devices.transport] table with kind and address is required)");
+  }
+  if (auto m = r.table("mapping")) d.mapping = read_mapping(*m);
+  read_limits(r, d.limits);
+  read_watchdogs(r, d.watchdogs);
+  d.wrench_mode = r.choice<WrenchMode>("wrench_mode", WrenchMode::interpolate,
+                                       {{"interpolate", WrenchMode::interpolate}, {"coupling", WrenchMode::coupling}});
+  d.require_deadman = r.boolean("require_deadman", false);
+  if (d.kind == DeviceKind::spacemouse)
+    r.check("kind", d.transport.kind == TransportKind::hid || d.transport.kind == TransportKind::loopback,
+            "a spacemouse is an input-only HID device: transport.kind must be \"hid\" or \"loopback\"");
+  r.finish();
+  return d;
+}
+
+RtSettings read_rt(Reader& r) {
+  RtSettings rt;
+  rt.period_ns = r.integer("period_ns", rt.period_ns);
+  r.check("period_ns", rt.period_ns >= 100'000 && rt.period_ns <= 100'000'000, "must be 100000..100000000 (0.1-100 ms)");
+  rt.priority = static_cast<int>(r.integer("priority", rt.priority));
+  r.check("priority", rt.priority >= 1 && rt.priority <= 99, "must be a SCHED_FIFO priority 1..99");
+  rt.cpu = static_cast<int>(r.integer("cpu", rt.cpu));
+  r.check("cpu", rt.cpu >= -1 && rt.cpu < 1024, "must be -1 (no pinning) or a CPU number");
+  rt.policy = r.choice<RtPolicy>("policy", RtPolicy::ignore, {{"enforce", RtPolicy::enforce}, {"ignore", RtPolicy::ignore}});
+  rt.trace_ring_records = static_cast<std::uint32_t>(r.integer("trace_ring_records", rt.trace_ring_records));
+  r.check("trace_ring_records",
+          rt.trace_ring_records >= 64 && (rt.trace_ring_records & (rt.trace_ring_records - 1)) == 0,
+          "must be a power of two >= 64");
+  rt.flight_recorder_ticks = static_cast<std::uint32_t>(r.integer("flight_recorder_ticks", rt.flight_recorder_ticks));
+  r.check("flight_recorder_ticks", rt.flight_recorder_ticks >= 1 && rt.flight_recorder_ticks <= 100000, "must be 1..100000");
+  if (auto shm = r.table("shm")) {
+    rt.shm.prefix = shm->string("prefix", rt.shm.prefix);
+    bool ok = !rt.shm.prefix.empty() && rt.shm.prefix.find('/') == std::string::npos && rt.shm.prefix.size() < 200;
+    shm->check("prefix", ok, "must be a non-empty name without '/'");
+    rt.shm.group = shm->string("group", rt.shm.group);
+    shm->finish();
+  }
+  r.finish();
+  return rt;
+}
+
+}  // namespace
+
+const RigDevice* Rig::find_device(const std::string& wanted) const {
+  for (const auto& d : devices)
+    if (d.name == wanted) return &d;
+  return nullptr;
+}
+
+Rig parse_rig(const std::string& text, const std::filesystem::path& file) {
+  toml::table root = detail::parse_toml(text, file);
+  detail::Diagnostics diag{file.string(), {}};
+  Reader r(root, "", diag);
+  Rig rig;
+  rig.file = file;
+  rig.name = r.string("name", file.stem().string());
+  if (auto rt = r.table("rt")) rig.rt = read_rt(*rt);
+  std::set<std::string> names;
+  for (auto& device : r.tables("devices")) {
+    rig.devices.push_back(read_device(device));
+    const std::string& name = rig.devices.back().name;
+    if (!name.empty() && !names.insert(name).second)
+      device.problem("name", "duplicate device name \"" + name + "\"");
+  }
+  if (!r.has("devices")) r.problem("devices", "missing (at least one [[devices]] entry is required)");
+  r.finish();
+  diag.throw_if_any();
+  return rig;
+}
+
+Rig load_rig(const std::filesystem::path& file) {
+  return parse_rig(detail::read_text_file(file, "rig"), file);
+}
+
+const char* to_string(DeviceKind k) { return k == DeviceKind::haptic_arm ? "haptic_arm" : "spacemouse"; }
+const char* to_string(TransportKind k) {
+  switch (k) {
+    case TransportKind::loopback: return "loopback";
+    case TransportKind::socketcan: return "socketcan";
+    case TransportKind::hid: return "hid";
+    case TransportKind::usb_bulk: return "usb_bulk";
+  }
+  return "?";
+}
+const char* to_string(WrenchMode m) { return m == WrenchMode::interpolate ? "interpolate" : "coupling"; }
+const char* to_string(RtPolicy p) { return p == RtPolicy::enforce ? "enforce" : "ignore"; }
+
+}  // namespace hapfluid::config

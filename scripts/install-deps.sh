@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Installs exactly what hapfluid needs and is missing: Debian packages through apt, Python
+# packages into the project venv (.venv). Idempotent and quiet when nothing is missing, so every
+# make target can call it. Nothing is fetched from anywhere but Debian's archive and PyPI.
+#
+#   scripts/install-deps.sh            core: build, test, run
+#   scripts/install-deps.sh hil        core + what the QEMU hardware-in-the-loop suite needs
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+group="${1:-core}"
+
+debian_core=(
+  build-essential cmake ninja-build pkg-config git
+  libtomlplusplus-dev googletest libgtest-dev libgmock-dev
+  libvulkan-dev libvulkan-volk-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
+  glslang-tools spirv-tools
+  libglfw3-dev libpng-dev libstb-dev libglm-dev xvfb xauth
+  libusb-1.0-0-dev libhidapi-dev can-utils libsystemd-dev systemd
+  rt-tests strace clang libclang-rt-14-dev
+  python3-venv
+)
+debian_hil=(qemu-system-x86 busybox-static cpio kmod)
+python_packages=(pytest numpy matplotlib python-can cantools hypothesis)
+
+want=("${debian_core[@]}")
+[ "$group" = hil ] && want+=("${debian_hil[@]}")
+
+missing=()
+for p in "${want[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+
+if [ ${#missing[@]} -gt 0 ]; then
+  if [ "$(id -u)" != 0 ]; then
+    echo "install-deps: missing Debian packages: ${missing[*]}" >&2
+    echo "install-deps: run as root (or: sudo apt-get install ${missing[*]})" >&2
+    exit 1
+  fi
+  echo "install-deps: installing Debian packages: ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  # A stale or empty package list makes apt say "unable to locate": refresh once, then install.
+  if ! apt-get install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1; then
+    apt-get update -q >/tmp/hapfluid-apt-update.log 2>&1 || { cat /tmp/hapfluid-apt-update.log >&2; exit 1; }
+    apt-get install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1 \
+      || { tail -n 30 /tmp/hapfluid-apt.log >&2; echo "install-deps: apt-get install failed (log: /tmp/hapfluid-apt.log)" >&2; exit 1; }
+  fi
+fi
+
+venv="$here/.venv"
+if [ ! -x "$venv/bin/python" ]; then
+  echo "install-deps: creating Python venv in $venv"
+  python3 -m venv "$venv" || /usr/bin/python3 -m venv "$venv"
+fi
+pymissing=()
+for p in "${python_packages[@]}"; do
+  "$venv/bin/python" -m pip show -q "$p" >/dev/null 2>&1 || pymissing+=("$p")
+done
+if [ ${#pymissing[@]} -gt 0 ]; then
+  echo "install-deps: installing Python packages into .venv: ${pymissing[*]}"
+  "$venv/bin/python" -m pip install -q --disable-pip-version-check "${pymissing[@]}"
+fi

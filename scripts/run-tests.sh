@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Runs every test: GoogleTest suites under ctest, then the Python suites under pytest. Both
+# print their own closing summary; the script fails if either fails. pytest's exit code 5
+# ("no tests collected") is not a failure of the build: it is reported and passes.
+set -uo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${1:-build}"
+cd "$here"
+
+echo "== C/C++ tests (ctest) =="
+ctest --test-dir "$build" --output-on-failure -j "$(nproc)" --timeout 600
+ctest_rc=$?
+
+echo "== Python tests (pytest) =="
+HAPFLUID_BUILD="$here/$build" "$here/.venv/bin/python" -m pytest -q -p no:cacheprovider tests
+py_rc=$?
+if [ "$py_rc" -eq 5 ]; then
+  echo "pytest: no Python tests were collected"
+  py_rc=0
+fi
+
+echo "== summary: ctest exit $ctest_rc, pytest exit $py_rc =="
+[ "$ctest_rc" -eq 0 ] && [ "$py_rc" -eq 0 ]
