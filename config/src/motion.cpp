@@ -56,6 +56,14 @@ double spin_angle(const MotionSegment& s, double tau) {
   return up + w * (duration - 2 * ramp) + w * down_tau - 0.5 * w * down_tau * down_tau / ramp;
 }
 
+// Amplitude envelope of an oscillation: smoothstep in over ramp_s, out over the last ramp_s.
+double oscillate_envelope(const MotionSegment& s, double tau) {
+  if (s.ramp_s <= 0) return 1.0;
+  const double duration = s.stop_s - s.start_s;
+  const double u = std::clamp(std::min(tau, duration - tau) / s.ramp_s, 0.0, 1.0);
+  return u * u * (3 - 2 * u);
+}
+
 // Tilt to angle_rad along a half-cosine, hold, and return the same way: smooth, so a scripted
 // hand never asks the device for a velocity step.
 double tilt_angle(const MotionSegment& s, double tau) {
@@ -92,7 +100,8 @@ Pose evaluate_pose(const ScriptedMotion& motion, double t) {
     const Vec3 pivot = add(motion.start.position_m, s.pivot_offset_m);
     switch (s.kind) {
       case MotionKind::oscillate:
-        pose.position_m = add(pose.position_m, mul(s.axis, s.amplitude_m * std::sin(2 * kPi * s.frequency_hz * tau)));
+        pose.position_m = add(pose.position_m, mul(s.axis, s.amplitude_m * oscillate_envelope(s, tau) *
+                                                                   std::sin(2 * kPi * s.frequency_hz * tau)));
         break;
       case MotionKind::spin: rotate_about(pose, pivot, axis_angle(s.axis, spin_angle(s, tau))); break;
       case MotionKind::tilt: rotate_about(pose, pivot, axis_angle(s.axis, tilt_angle(s, tau))); break;

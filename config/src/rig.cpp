@@ -68,7 +68,7 @@ void read_limits(Reader& r, DeviceLimits& l) {
   l.max_force_axis_n = r.vec3("max_force_axis_n", l.max_force_axis_n);
   l.max_torque_axis_nm = r.vec3("max_torque_axis_nm", l.max_torque_axis_nm);
   for (auto [key, v] : {std::pair{"max_force_axis_n", l.max_force_axis_n}, {"max_torque_axis_nm", l.max_torque_axis_nm}})
-    r.check(key, v.x > 0 && v.y > 0 && v.z > 0, "every component must be > 0");
+    if (r.has(key)) r.check(key, v.x > 0 && v.y > 0 && v.z > 0, "every component must be > 0");
   pos("max_force_rate_n_per_s", l.max_force_rate_n_per_s);
   pos("max_torque_rate_nm_per_s", l.max_torque_rate_nm_per_s);
   pos("max_stiffness_n_per_m", l.max_stiffness_n_per_m);

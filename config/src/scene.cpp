@@ -81,7 +81,7 @@ Fluid read_fluid(Reader& r, const Domain& domain) {
                                 {"honey", FluidLook::honey}, {"syrup", FluidLook::syrup}});
   for (auto& b : r.tables("blocks")) {
     FluidBlock block{read_box(b)};
-    if (b.has("min_m") && b.has("max_m") && ordered(block.box)) {
+    if (b.has("min_m") && b.has("max_m") && ordered(block.box) && ordered(domain.box)) {
       b.check("max_m", inside(block.box, domain.box, 1e-9),
               "fluid block " + fmt(block.box.min_m) + ".." + fmt(block.box.max_m) + " must lie inside the domain " +
                   fmt(domain.box.min_m) + ".." + fmt(domain.box.max_m));
@@ -196,6 +196,8 @@ MotionSegment read_segment(Reader& r) {
       r.check("amplitude_m", s.amplitude_m >= 0, "must be >= 0");
       s.frequency_hz = r.required_number("frequency_hz");
       r.check("frequency_hz", s.frequency_hz > 0 || !r.has("frequency_hz"), "must be > 0");
+      s.ramp_s = r.number("ramp_s", 0.0);
+      r.check("ramp_s", s.ramp_s >= 0 && 2 * s.ramp_s <= s.stop_s - s.start_s, "must be >= 0 and fit twice in stop_s - start_s");
       break;
     case MotionKind::spin:
       unit_axis();

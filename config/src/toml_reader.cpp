@@ -1,16 +1,45 @@
 #include "toml_reader.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
 namespace hapfluid::config::detail {
 
+// The value as a user would write it: shortest round-trip numbers, double-quoted strings.
+static void write_value(std::string& out, const toml::node& node) {
+  if (const auto* f = node.as_floating_point()) {
+    char buf[64];
+    auto result = std::to_chars(buf, buf + sizeof buf, f->get());
+    std::string text(buf, result.ptr);
+    if (std::isfinite(f->get()) && text.find_first_of(".e") == std::string::npos) text += ".0";
+    out += text;
+  } else if (const auto* i = node.as_integer()) {
+    out += std::to_string(i->get());
+  } else if (const auto* b = node.as_boolean()) {
+    out += b->get() ? "true" : "false";
+  } else if (const auto* str = node.as_string()) {
+    out += '"' + str->get() + '"';
+  } else if (const auto* a = node.as_array()) {
+    out += '[';
+    for (size_t k = 0; k < a->size(); ++k) {
+      if (k) out += ", ";
+      write_value(out, *a->get(k));
+    }
+    out += ']';
+  } else if (node.is_table()) {
+    out += "{...}";
+  } else {
+    std::ostringstream other;
+    node.visit([&](const auto& value) { other << value; });
+    out += other.str();
+  }
+}
+
 std::string describe(const toml::node& node) {
-  if (node.is_table()) return "{...}";
-  std::ostringstream out;
-  node.visit([&](const auto& value) { out << value; });
-  std::string text = out.str();
-  if (text.size() > 60) text = text.substr(0, 57) + "...";
+  std::string text;
+  write_value(text, node);
+  if (text.size() > 80) text = text.substr(0, 77) + "...";
   return text;
 }
 

@@ -35,7 +35,9 @@ struct MotionSegment {
   double frequency_hz = 0.0;
   // spin
   double angular_speed_rad_s = 0.0;
-  double ramp_s = 0.0;          // spin: time to reach (and to leave) the angular speed
+  // spin: time to reach (and to leave) the angular speed; oscillate: time over which the
+  // amplitude fades in and out (smoothstep), so the hand starts and stops without a velocity step
+  double ramp_s = 0.0;
   // tilt
   double angle_rad = 0.0;
   double hold_s = 0.0;          // tilt: time spent at the full angle before returning
