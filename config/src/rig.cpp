@@ -11,8 +11,6 @@ namespace {
 
 using detail::Reader;
 
-void positive(Reader& r, std::string_view key, double value) { r.check(key, value > 0, "must be > 0"); }
-
 Transport read_transport(Reader& r) {
   Transport t;
   t.kind = r.choice<TransportKind>("kind", TransportKind::loopback,
@@ -46,22 +44,16 @@ Transport read_transport(Reader& r) {
 WorkspaceMapping read_mapping(Reader& r) {
   WorkspaceMapping m;
   m.offset_m = r.vec3("offset_m", m.offset_m);
-  m.scale = r.number("scale", m.scale);
-  positive(r, "scale", m.scale);
+  r.positive("scale", m.scale);
   m.rotation = r.quaternion("rotation", m.rotation);
-  m.force_scale = r.number("force_scale", m.force_scale);
-  positive(r, "force_scale", m.force_scale);
+  r.positive("force_scale", m.force_scale);
   r.finish();
   return m;
 }
 
 void read_limits(Reader& r, DeviceLimits& l) {
-  auto pos = [&](std::string_view key, double& value) {
-    value = r.number(key, value);
-    positive(r, key, value);
-  };
-  pos("max_force_n", l.max_force_n);
-  pos("max_torque_nm", l.max_torque_nm);
+  r.positive("max_force_n", l.max_force_n);
+  r.positive("max_torque_nm", l.max_torque_nm);
   // Per-axis limits default to the norm limit.
   l.max_force_axis_n = {l.max_force_n, l.max_force_n, l.max_force_n};
   l.max_torque_axis_nm = {l.max_torque_nm, l.max_torque_nm, l.max_torque_nm};
@@ -69,25 +61,21 @@ void read_limits(Reader& r, DeviceLimits& l) {
   l.max_torque_axis_nm = r.vec3("max_torque_axis_nm", l.max_torque_axis_nm);
   for (auto [key, v] : {std::pair{"max_force_axis_n", l.max_force_axis_n}, {"max_torque_axis_nm", l.max_torque_axis_nm}})
     if (r.has(key)) r.check(key, v.x > 0 && v.y > 0 && v.z > 0, "every component must be > 0");
-  pos("max_force_rate_n_per_s", l.max_force_rate_n_per_s);
-  pos("max_torque_rate_nm_per_s", l.max_torque_rate_nm_per_s);
-  pos("max_stiffness_n_per_m", l.max_stiffness_n_per_m);
-  pos("max_angular_stiffness_nm_per_rad", l.max_angular_stiffness_nm_per_rad);
+  r.positive("max_force_rate_n_per_s", l.max_force_rate_n_per_s);
+  r.positive("max_torque_rate_nm_per_s", l.max_torque_rate_nm_per_s);
+  r.positive("max_stiffness_n_per_m", l.max_stiffness_n_per_m);
+  r.positive("max_angular_stiffness_nm_per_rad", l.max_angular_stiffness_nm_per_rad);
   l.device_damping_n_s_per_m = r.number("device_damping_n_s_per_m", l.device_damping_n_s_per_m);
   r.check("device_damping_n_s_per_m", l.device_damping_n_s_per_m >= 0, "must be >= 0");
 }
 
 void read_watchdogs(Reader& r, Watchdogs& w) {
-  auto pos = [&](std::string_view key, double& value) {
-    value = r.number(key, value);
-    positive(r, key, value);
-  };
-  pos("sim_stale_ms", w.sim_stale_ms);
-  pos("sim_ramp_down_ms", w.sim_ramp_down_ms);
-  pos("link_timeout_ms", w.link_timeout_ms);
-  pos("engage_threshold_n", w.engage_threshold_n);
-  pos("engage_ramp_ms", w.engage_ramp_ms);
-  pos("device_watchdog_ms", w.device_watchdog_ms);
+  r.positive("sim_stale_ms", w.sim_stale_ms);
+  r.positive("sim_ramp_down_ms", w.sim_ramp_down_ms);
+  r.positive("link_timeout_ms", w.link_timeout_ms);
+  r.positive("engage_threshold_n", w.engage_threshold_n);
+  r.positive("engage_ramp_ms", w.engage_ramp_ms);
+  r.positive("device_watchdog_ms", w.device_watchdog_ms);
 }
 
 RigDevice read_device(Reader& r) {

@@ -155,7 +155,16 @@ static std::optional<std::vector<double>> numbers(const toml::node& node, size_t
 }
 
 Vec3 Reader::vec3(std::string_view key, Vec3 fallback) {
-  return required_vec3_or(key, fallback, false);
+  if (!table_->contains(key)) {
+    known_.insert(std::string(key));
+    return fallback;
+  }
+  return required_vec3(key).value_or(fallback);
+}
+
+void Reader::positive(std::string_view key, double& value) {
+  value = number(key, value);
+  check(key, value > 0, "must be > 0");
 }
 
 std::optional<Vec3> Reader::required_vec3(std::string_view key) {
@@ -169,17 +178,6 @@ std::optional<Vec3> Reader::required_vec3(std::string_view key) {
   if (!v) {
     wrong_type(key, *node, "an array of 3 finite numbers");
     return std::nullopt;
-  }
-  return Vec3{(*v)[0], (*v)[1], (*v)[2]};
-}
-
-Vec3 Reader::required_vec3_or(std::string_view key, Vec3 fallback, bool) {
-  const toml::node* node = get(key);
-  if (!node) return fallback;
-  auto v = numbers(*node, 3);
-  if (!v) {
-    wrong_type(key, *node, "an array of 3 finite numbers");
-    return fallback;
   }
   return Vec3{(*v)[0], (*v)[1], (*v)[2]};
 }

@@ -54,6 +54,8 @@ class Reader {
   Vec3 vec3(std::string_view key, Vec3 fallback);
   std::optional<Vec3> required_vec3(std::string_view key);
   Quat quaternion(std::string_view key, Quat fallback);  // normalised; zero is an error
+  // Reads an optional number over `value` (its default) and requires it to be > 0.
+  void positive(std::string_view key, double& value);
 
   template <class Enum>
   Enum choice(std::string_view key, Enum fallback,
@@ -73,7 +75,6 @@ class Reader {
  private:
   const toml::node* get(std::string_view key);
   void wrong_type(std::string_view key, const toml::node& node, const std::string& expected);
-  Vec3 required_vec3_or(std::string_view key, Vec3 fallback, bool);
 
   const toml::table* table_;
   std::string path_;
