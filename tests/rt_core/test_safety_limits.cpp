@@ -75,6 +75,7 @@ TEST(SafetyLimits, RateLimitBoundsTheChangePerTickAndKeepsItsDirection) {
 
 TEST(Passivity, DampingIsAddedOnlyAfterTheEnvironmentTurnedActive) {
   SafetyConfig c = defaults();
+  c.passivity_energy_cap_j = 0.0;  // no reservoir: react to the first joule
   PassivityController pc(c);
   std::uint32_t flags = 0;
   V3 v{0.1, 0, 0};
@@ -93,7 +94,7 @@ TEST(Passivity, DampingIsAddedOnlyAfterTheEnvironmentTurnedActive) {
 TEST(Passivity, ControllerKeepsAnEnergyGeneratingRenderingFromPumpingTheHand) {
   // A rendering with negative damping (F = +5 N*s/m * v) is a pure energy source. Over 10 s of
   // 2 Hz hand oscillation it would deliver joules; with the controller the hand receives at most
-  // the observer's reservoir (0.2 J) plus one tick's worth.
+  // the observer's initial reservoir (0.2 J) plus one tick's worth.
   SafetyConfig c = defaults();
   auto energy_to_hand = [&](bool enabled) {
     c.passivity_enabled = enabled;
