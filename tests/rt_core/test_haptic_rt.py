@@ -70,6 +70,28 @@ def test_killing_the_sim_ramps_the_wrench_to_zero_and_a_restart_resumes(binary, 
     assert leftover_segments(prefix) == [], "a clean stop leaves no shared memory behind"
 
 
+def test_a_crashed_sims_leftover_sample_is_never_rendered(binary, tmp_path):
+    # A sim killed before haptic-rt starts leaves its last 5 N sample in shared memory. haptic-rt
+    # attaches to that segment but the sample is older than sim_stale_ms: nothing is rendered.
+    prefix = unique_prefix("leftover")
+    sim = start_sim(binary, prefix, "--rate", "100", "--force", "5,0,0")
+    time.sleep(0.3)
+    sim.send_signal(signal.SIGKILL)
+    sim.wait()
+    time.sleep(0.2)  # the leftover sample is now well over sim_stale_ms (50 ms) old
+    try:
+        rt = start_rt(binary, RIGS / "one_arm.toml", prefix, tmp_path, 0.8)
+        _, err = rt.communicate(timeout=15)
+    finally:
+        for name in leftover_segments(prefix):  # the crashed sim's segment is ours to clean up
+            os.unlink("/dev/shm/" + name)
+    assert rt.returncode == 0, err
+    assert "attached" in err, "it did map the leftover segment"
+    rows = read_trace(tmp_path / "trace.csv")
+    assert all(force(r) == (0.0, 0.0, 0.0) for r in rows)
+    assert all(int(r["d0_faults"]) & FAULT_SIM_STALE for r in rows)
+
+
 @pytest.mark.parametrize("pattern", ["huge", "nan", "random"])
 def test_a_hostile_sim_never_pushes_beyond_the_rig_limits(binary, tmp_path, pattern):
     # two_arms.toml: left (interpolate) 6 N norm, axis [6, 4, 5] N, 0.3 N*m, 500 N/s; right

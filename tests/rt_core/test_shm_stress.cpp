@@ -56,7 +56,7 @@ struct ReaderCounts {
   std::uint64_t backwards = 0;
 };
 
-constexpr auto kDuration = std::chrono::milliseconds(2000);
+constexpr auto kDuration = std::chrono::milliseconds(3000);  // cap; an idle machine reaches the target in ~1.5 s
 constexpr std::uint64_t kReadTarget = 3'000'000;  // per reader; stops early once reached
 
 pid_t spawn(auto body) {
@@ -130,7 +130,9 @@ TEST(ShmStress, LatestChannelNeverReturnsATornRecordAcrossProcesses) {
                (unsigned long long)published);
   EXPECT_EQ(total.torn, 0u);
   EXPECT_EQ(total.backwards, 0u) << "a reader must never see an older record after a newer one";
-  EXPECT_GT(total.reads, 1'000'000u) << "too few reads to mean anything";
+  // Millions on an idle machine (6 M in ~1.5 s here); the floor only guards against a test that
+  // silently stopped reading, since CI runs other tests on the same two cores.
+  EXPECT_GT(total.reads, 500'000u) << "too few reads to mean anything";
   EXPECT_GT(published, 100'000u) << "the writer must have been racing the readers";
   writer_segment.close();
 }
@@ -168,7 +170,7 @@ TEST(ShmStress, TraceRingDeliversIntactRecordsInOrderAndCountsTheRest) {
     c.position = reader.position();
     (void)!::write(done[1], &c, sizeof c);
   });
-  auto end = std::chrono::steady_clock::now() + kDuration / 2;
+  auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(1000);
   std::uint64_t pushed = 0;
   while (std::chrono::steady_clock::now() < end)
     for (int i = 0; i < 256; ++i) writer.push(make_record(pushed++));
@@ -182,5 +184,5 @@ TEST(ShmStress, TraceRingDeliversIntactRecordsInOrderAndCountsTheRest) {
   EXPECT_EQ(c.disorder, 0u);
   EXPECT_EQ(c.position, pushed) << "the reader reached the end";
   EXPECT_EQ(c.read + c.lost, c.position - c.start) << "every record is either delivered or counted lost";
-  EXPECT_GT(c.read, 100'000u);
+  EXPECT_GT(c.read, 10'000u) << "the reader kept up for a meaningful share";
 }

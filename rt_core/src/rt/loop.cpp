@@ -105,6 +105,16 @@ void RtLoop::read_sim(std::uint64_t now, std::uint32_t& loop_flags) {
   loop_flags |= loop_new_sim_sample;
 }
 
+double RtLoop::sim_age_ms(std::uint64_t now) const {
+  if (!have_sample_) return 1e300;
+  // The older of "since it arrived here" and "since the sim published it" (same CLOCK_MONOTONIC):
+  // a sample left in the segment of a crashed sim is stale on arrival, and a sample stamped in
+  // the future by a broken sim still ages by its arrival time.
+  std::uint64_t since_arrival = now - last_new_sample_ns_;
+  std::uint64_t since_publish = sample_.publish_ns <= now ? now - sample_.publish_ns : 0;
+  return double(since_arrival > since_publish ? since_arrival : since_publish) * 1e-6;
+}
+
 void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, bool new_sample) {
   bool valid = state_valid(d.state);
   Twist6 scene = d.workspace.to_scene(valid ? device_twist(d.state) : Twist6{});
@@ -132,7 +142,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.device_fault = d.state.fault != 0 || !health.connected;
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
-  in.sim_age_ms = have_sample_ ? double(now - last_new_sample_ns_) * 1e-6 : 1e300;
+  in.sim_age_ms = sim_age_ms(now);
   safety::SafetyOutput out = d.safety.step(in);
   if (capped) out.flags |= safety::flag_stiffness_capped;
 

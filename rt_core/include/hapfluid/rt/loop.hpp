@@ -103,6 +103,7 @@ class RtLoop {
 
   void read_sim(std::uint64_t now_ns, std::uint32_t& loop_flags);
   void render_device(PerDevice& d, std::size_t index, std::uint64_t now_ns, bool new_sample);
+  double sim_age_ms(std::uint64_t now_ns) const;
   void publish(std::uint64_t tick, std::uint64_t scheduled_ns);
 
   config::Rig rig_;
