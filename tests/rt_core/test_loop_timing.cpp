@@ -68,7 +68,7 @@ address = "/tmp/unused"
     previous = r;
     ++records;
   }
-  EXPECT_GT(records, 300);
+  EXPECT_GT(records, 150) << "the loop ran (about 380 ticks on an idle machine)";
   EXPECT_GE(rephased, 4) << "every 50th tick stalls for 2.5 ms";
   // The trace's running count matches the loop's (the last tick may still add its own overrun).
   EXPECT_GE(loop.overruns(), previous.overruns);
