@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <fcntl.h>
+#include <grp.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -69,6 +70,21 @@ TEST(ShmChannel, SegmentIsCreatedWithMode0660AndRemovedOnCleanClose) {
   writer.close();
   EXPECT_NE(::stat(("/dev/shm" + name).c_str(), &st), 0) << "a clean stop leaves no segment behind";
   EXPECT_EQ(reader.status(monotonic_ns(), 0), WriterStatus::closed);
+}
+
+TEST(ShmChannel, SegmentBelongsToTheConfiguredGroup) {
+  // rt.shm.group lets the sim and render services (another user, same group) read the channel.
+  struct group* g = ::getgrgid(::getgid());
+  ASSERT_NE(g, nullptr);
+  auto name = unique_name("owned");
+  WriterOptions options;
+  options.group = g->gr_name;
+  auto writer = LatestWriter::create(name, ChannelKind::device_states, 64, 4, options);
+  struct stat st {};
+  ASSERT_EQ(::stat(("/dev/shm" + name).c_str(), &st), 0);
+  EXPECT_EQ(st.st_gid, g->gr_gid);
+  EXPECT_EQ(st.st_mode & 0777, 0660u);
+  writer.close();
 }
 
 TEST(ShmChannel, UnknownGroupIsRefusedWithItsName) {

@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <sched.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -32,6 +33,15 @@ void Supervisor::start() {
     // Explicitly ordinary scheduling, even if created after the RT set-up.
     sched_param param{};
     pthread_setschedparam(pthread_self(), SCHED_OTHER, &param);
+    // Keep off the loop's CPU when it has one (and another CPU exists).
+    int rt_cpu = loop_.rig().rt.cpu;
+    if (rt_cpu >= 0 && sysconf(_SC_NPROCESSORS_ONLN) > 1) {
+      cpu_set_t set;
+      CPU_ZERO(&set);
+      for (long cpu = 0; cpu < sysconf(_SC_NPROCESSORS_ONLN) && cpu < CPU_SETSIZE; ++cpu)
+        if (cpu != rt_cpu) CPU_SET(cpu, &set);
+      pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+    }
     run();
   });
 }
@@ -40,6 +50,10 @@ void Supervisor::stop() {
   if (!running_.exchange(false)) return;
   if (thread_.joinable()) thread_.join();
   step(/*final=*/true);
+  if (trace_file_)
+    std::fprintf(stderr, "haptic-rt: trace: %llu records written to %s, %llu lost (drainer too slow)\n",
+                 (unsigned long long)(trace_reader_.position() - trace_reader_.lost()), options_.trace_path.c_str(),
+                 (unsigned long long)trace_reader_.lost());
   if (notifier_.active()) notifier_.send("STOPPING=1");
 }
 

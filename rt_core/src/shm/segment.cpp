@@ -154,10 +154,9 @@ Segment Segment::create(const std::string& name, ChannelKind kind, std::uint32_t
   ::shm_unlink(name.c_str());  // a dead writer's leftover; ENOENT is the normal case
 
   Layout layout = layout_for(slot_count, payload_bytes);
-  mode_t old_mask = ::umask(0);
-  int fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, options.mode);
+  // Created owner-only; fchmod below sets the exact mode (no process-wide umask games).
+  int fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
   int err = errno;
-  ::umask(old_mask);
   if (fd < 0)
     throw ShmError("shm " + name + ": cannot create: " + errno_text(err) +
                    (err == EEXIST ? " (another writer created it at the same moment)" : ""));
