@@ -88,11 +88,13 @@ void RtLoop::read_sim(std::uint64_t now, std::uint32_t& loop_flags) {
     loop_flags |= loop_sim_not_attached;
     return;
   }
+  // Nothing new since the last copy: skip the 2-3 KB read.
+  std::uint64_t incarnation = sim_->reader.segment().header().incarnation;
+  if (incarnation == sample_incarnation_ && sim_->reader.published() == sample_generation_) return;
   std::uint64_t generation = 0;
   shm::ReadResult r = sim_->reader.try_read(scratch_, &generation);
   if (r == shm::ReadResult::busy) loop_flags |= loop_sim_read_busy;
   if (r != shm::ReadResult::ok) return;
-  std::uint64_t incarnation = sim_->reader.segment().header().incarnation;
   bool restarted = incarnation != sample_incarnation_;
   if (!restarted && generation == sample_generation_) return;
   if (restarted)
