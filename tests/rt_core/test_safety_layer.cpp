@@ -226,3 +226,23 @@ TEST(SafetyLayer, DescribeListsEveryLimitAndItsSource) {
   EXPECT_EQ(fault_names(fault_estop | fault_sim_stale), "estop|sim_stale");
   EXPECT_EQ(flag_names(0), "-");
 }
+
+TEST(SafetyLayer, StalenessRampFollowsElapsedTimeWhenTicksAreSkipped) {
+  // An overloaded loop that only runs every 5 ms must still reach zero within sim_ramp_down_ms
+  // (100 ms) of the watchdog firing, not 5x later.
+  Harness h;
+  h.settle({{8, 0, 0}, {}});
+  SafetyInput in;
+  in.command = {{8, 0, 0}, {}};
+  in.fresh_frame = true;
+  std::uint64_t stale_since = h.now_ns;
+  SafetyOutput out;
+  for (int k = 1; k <= 40; ++k) {
+    in.now_ns = h.now_ns + k * 5 * kTickNs;
+    in.sim_age_ms = double(in.now_ns - stale_since) * 1e-6;
+    out = h.layer.step(in);
+    if (in.sim_age_ms >= 50 + 100 + 5) {
+      EXPECT_EQ(out.wrench, Wrench{}) << "at " << in.sim_age_ms << " ms";
+    }
+  }
+}

@@ -30,7 +30,12 @@ void SafetyLayer::update_link(const SafetyInput& in) {
 
 SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   SafetyOutput out;
-  const double dt_ms = config_.period_s * 1e3;
+  // Ramps follow elapsed time, so "zero within sim_ramp_down_ms" holds even when ticks were
+  // skipped (overruns); the rate limit stays per tick (the change the device sees at once).
+  double dt_ms = config_.period_s * 1e3;
+  if (last_now_ns_ != 0 && in.now_ns > last_now_ns_)
+    dt_ms = std::min(double(in.now_ns - last_now_ns_) * 1e-6, 100.0);
+  last_now_ns_ = in.now_ns;
   V3 v = finite(in.linear_velocity_m_s) ? in.linear_velocity_m_s : V3{};
   V3 w = finite(in.angular_velocity_rad_s) ? in.angular_velocity_rad_s : V3{};
   SafetyInput checked = in;

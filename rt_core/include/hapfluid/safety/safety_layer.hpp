@@ -7,6 +7,8 @@
 //   3. magnitude limits          force/torque norm, then per-axis limits; direction preserved.
 //   4. sim staleness ramp        no fresh sim sample for sim_stale_ms -> scale ramps 1 -> 0 over
 //                                sim_ramp_down_ms; fresh samples again -> ramps back over engage_ramp_ms.
+//                                (Ramps use the elapsed time between steps, so skipped ticks do
+//                                not stretch them.)
 //   5. engage                    after any hard zero the output stays zero until the (scaled)
 //                                command is below engage_threshold_n/_nm, then ramps in over
 //                                engage_ramp_ms.
@@ -82,6 +84,7 @@ class SafetyLayer {
   bool estop_input_held_ = false;
   bool seen_frame_ = false;
   std::uint64_t last_fresh_ns_ = 0;
+  std::uint64_t last_now_ns_ = 0;
   std::uint64_t healthy_since_ns_ = 0;
   bool healthy_ = false;
   double stale_scale_ = 0;         // step 4
