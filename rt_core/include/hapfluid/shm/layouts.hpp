@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <string>
+#include <type_traits>
 
 namespace hapfluid::shm {
 
@@ -144,5 +145,15 @@ struct TraceRecord {
   std::uint32_t reserved;
   TraceDevice devices[kMaxDevices];
 };
+
+// Guards: these records cross process boundaries byte for byte. A failing size check means a
+// layout changed: bump kAbiVersion, then update the number here.
+template <class T>
+inline constexpr bool kPlainRecord = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T>;
+static_assert(kPlainRecord<DeviceStatesRecord> && kPlainRecord<SimSample> && kPlainRecord<ParticleFrameHeader> &&
+              kPlainRecord<ParticleRecord> && kPlainRecord<TraceRecord>);
+static_assert(kAbiVersion == 1 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2472 &&
+                  sizeof(ParticleFrameHeader) == 936 && sizeof(ParticleRecord) == 16 && sizeof(TraceRecord) == 216,
+              "shm layout changed: bump kAbiVersion and update these sizes");
 
 }  // namespace hapfluid::shm
