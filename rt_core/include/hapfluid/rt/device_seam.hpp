@@ -1,0 +1,19 @@
+// The one place that maps a rig device to a Device object. At merge, the real
+// firmware_bridge factory (open_device(const config::RigDevice&)) goes in here.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/device/device.hpp"
+
+namespace hapfluid::rt {
+
+enum class DeviceBackend { driver, simulated };
+
+// Returns the device, or nullptr with `error` saying why and how to fix it.
+std::unique_ptr<device::Device> open_rig_device(const config::RigDevice& device, DeviceBackend backend,
+                                                std::string& error);
+
+}  // namespace hapfluid::rt

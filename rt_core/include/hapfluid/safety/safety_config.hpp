@@ -1,0 +1,42 @@
+// Every number the safety layer uses, in one struct, built from the rig file. Values the rig
+// schema does not carry yet have safe defaults here; describe() prints all of them at start-up
+// with where each came from, so no limit is ever silent.
+#pragma once
+
+#include <string>
+
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/safety/wrench.hpp"
+
+namespace hapfluid::safety {
+
+struct SafetyConfig {
+  double period_s = 0.001;
+  // Limits (device frame, device units), from the rig's device limits.
+  double max_force_n = 10.0;
+  double max_torque_nm = 0.5;
+  V3 max_force_axis_n{10, 10, 10};
+  V3 max_torque_axis_nm{0.5, 0.5, 0.5};
+  double max_force_rate_n_per_s = 1000.0;
+  double max_torque_rate_nm_per_s = 50.0;
+  // Watchdogs, from the rig's device watchdogs.
+  double sim_stale_ms = 50.0;
+  double sim_ramp_down_ms = 100.0;
+  double link_timeout_ms = 5.0;
+  double engage_threshold_n = 1.0;
+  double engage_ramp_ms = 200.0;
+  bool require_deadman = false;
+  // Not in the rig schema (yet): safe defaults.
+  double engage_threshold_nm = 0.05;             // torque counterpart of engage_threshold_n
+  double link_recover_ms = 100.0;                // healthy link this long before the link fault clears
+  double passivity_max_damping_n_s_per_m = 20.0; // most damping the passivity controller may add
+  double passivity_max_damping_nm_s_per_rad = 0.2;
+  double passivity_energy_cap_j = 0.2;           // the observer's stored-energy reservoir cap
+  bool passivity_enabled = true;
+};
+
+SafetyConfig make_safety_config(const config::RigDevice& device, std::int64_t period_ns);
+// Multi-line, one "name = value (source)" per line, for the start-up log.
+std::string describe(const SafetyConfig& config);
+
+}  // namespace hapfluid::safety

@@ -1,0 +1,95 @@
+// The safety layer: every command that reaches a device passes through SafetyLayer::step, once per
+// tick, in this fixed order (brief: Contracts; issue 5):
+//
+//   1. non-finite -> zero        NaN/Inf in the command -> zero wrench; a non-finite device state
+//                                is a link_invalid fault (step 7).
+//   2. passivity controller      adds damping when the observed energy turns active (passivity.hpp).
+//   3. magnitude limits          force/torque norm, then per-axis limits; direction preserved.
+//   4. sim staleness ramp        no fresh sim sample for sim_stale_ms -> scale ramps 1 -> 0 over
+//                                sim_ramp_down_ms; fresh samples again -> ramps back over engage_ramp_ms.
+//                                (Ramps use the elapsed time between steps, so skipped ticks do
+//                                not stretch them.)
+//   5. engage                    after any hard zero the output stays zero until the (scaled)
+//                                command is below engage_threshold_n/_nm, then ramps in over
+//                                engage_ramp_ms.
+//   6. rate limit                change per tick <= max_*_rate * period (uniform scaling, so the
+//                                limits of step 3 still hold).
+//   7. hard gates                latched e-stop, link timeout/invalid state, device fault, deadman
+//                                released (when required) -> exactly zero at once, bypassing the
+//                                rate limit: zero is always the safe command.
+//   8. passivity observer        accounts for the wrench actually sent.
+//
+// Recovery rules: e-stop needs reset_estop() while the e-stop input is released; link faults
+// clear after link_recover_ms of healthy frames, then the wrench re-engages through step 5;
+// sim staleness clears with the first fresh sample and resumes through the step-4 ramp.
+// Pure state machine: no clock reads, no I/O, no allocation; time arrives in the input.
+#pragma once
+
+#include <cstdint>
+
+#include "hapfluid/safety/flags.hpp"
+#include "hapfluid/safety/limits.hpp"
+#include "hapfluid/safety/passivity.hpp"
+#include "hapfluid/safety/safety_config.hpp"
+
+namespace hapfluid::safety {
+
+struct SafetyInput {
+  std::uint64_t now_ns = 0;
+  Wrench command;                  // device frame, from the wrench renderer
+  V3 linear_velocity_m_s;          // handle twist, device frame
+  V3 angular_velocity_rad_s;
+  bool fresh_frame = false;        // a new frame arrived this tick
+  bool state_valid = true;         // the newest device state is finite and in range
+  bool device_fault = false;       // device-reported fault bits, or the transport is disconnected
+  bool deadman_pressed = false;
+  bool estop_input = false;        // e-stop button / operator request (latches)
+  double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
+};
+
+struct SafetyOutput {
+  Wrench wrench;                   // the only wrench that may be sent
+  bool enable = false;             // false: device must hold zero torque
+  bool estop = false;              // latched e-stop
+  std::uint32_t flags = 0;
+  std::uint32_t faults = 0;
+};
+
+class SafetyLayer {
+ public:
+  explicit SafetyLayer(const SafetyConfig& config) : config_(config), passivity_(config_) {}
+  SafetyLayer(const SafetyLayer&) = delete;
+  SafetyLayer& operator=(const SafetyLayer&) = delete;
+
+  SafetyOutput step(const SafetyInput& input);
+  // Explicit operator reset of a latched e-stop; refused (false) while the e-stop input is held.
+  bool reset_estop();
+  // Operator request: latches the e-stop on the next step.
+  void request_estop() { estop_requested_ = true; }
+
+  const SafetyConfig& config() const { return config_; }
+  std::uint32_t faults() const { return faults_; }
+  double passivity_energy_j() const { return passivity_.energy_j(); }
+
+ private:
+  enum class Engage { disengaged, ramping, engaged };
+  void update_link(const SafetyInput& in);
+
+  SafetyConfig config_;
+  PassivityController passivity_;
+  Wrench previous_;                // last wrench sent
+  std::uint32_t faults_ = fault_link_timeout;  // no frame seen yet
+  bool estop_latched_ = false;
+  bool estop_requested_ = false;
+  bool estop_input_held_ = false;
+  bool seen_frame_ = false;
+  std::uint64_t last_fresh_ns_ = 0;
+  std::uint64_t last_now_ns_ = 0;
+  std::uint64_t healthy_since_ns_ = 0;
+  bool healthy_ = false;
+  double stale_scale_ = 0;         // step 4
+  Engage engage_ = Engage::disengaged;
+  double engage_scale_ = 0;        // step 5
+};
+
+}  // namespace hapfluid::safety

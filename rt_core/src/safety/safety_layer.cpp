@@ -1,0 +1,117 @@
+#include "hapfluid/safety/safety_layer.hpp"
+
+#include <algorithm>
+
+namespace hapfluid::safety {
+namespace {
+constexpr double kNsPerMs = 1e6;
+}
+
+void SafetyLayer::update_link(const SafetyInput& in) {
+  if (in.fresh_frame && in.state_valid) {
+    last_fresh_ns_ = in.now_ns;
+    seen_frame_ = true;
+  }
+  bool timed_out = !seen_frame_ || double(in.now_ns - last_fresh_ns_) > config_.link_timeout_ms * kNsPerMs;
+  bool healthy_now = !timed_out && in.state_valid && !in.device_fault;
+  if (healthy_now && !healthy_) healthy_since_ns_ = in.now_ns;
+  healthy_ = healthy_now;
+
+  std::uint32_t link_bits = fault_link_timeout | fault_link_invalid | fault_device_reported;
+  if (!healthy_now) {
+    if (timed_out) faults_ |= fault_link_timeout;
+    if (!in.state_valid) faults_ |= fault_link_invalid;
+    if (in.device_fault) faults_ |= fault_device_reported;
+  } else if ((faults_ & link_bits) &&
+             double(in.now_ns - healthy_since_ns_) >= config_.link_recover_ms * kNsPerMs) {
+    faults_ &= ~link_bits;  // healthy long enough; the wrench re-engages through step 5
+  }
+}
+
+SafetyOutput SafetyLayer::step(const SafetyInput& in) {
+  SafetyOutput out;
+  // Ramps follow elapsed time, so "zero within sim_ramp_down_ms" holds even when ticks were
+  // skipped (overruns); the rate limit stays per tick (the change the device sees at once).
+  double dt_ms = config_.period_s * 1e3;
+  if (last_now_ns_ != 0 && in.now_ns > last_now_ns_)
+    dt_ms = std::min(double(in.now_ns - last_now_ns_) * 1e-6, 100.0);
+  last_now_ns_ = in.now_ns;
+  V3 v = finite(in.linear_velocity_m_s) ? in.linear_velocity_m_s : V3{};
+  V3 w = finite(in.angular_velocity_rad_s) ? in.angular_velocity_rad_s : V3{};
+  SafetyInput checked = in;
+  if (!finite(in.linear_velocity_m_s) || !finite(in.angular_velocity_rad_s)) {
+    checked.state_valid = false;
+    out.flags |= flag_nonfinite_input;
+  }
+
+  // E-stop latch: a request or a rising e-stop input latches; only reset_estop() clears it.
+  estop_input_held_ = in.estop_input;
+  if (in.estop_input || estop_requested_) estop_latched_ = true;
+  estop_requested_ = false;
+  if (estop_latched_) faults_ |= fault_estop;
+  update_link(checked);
+
+  // 1-3: sanitize, passivity, limits.
+  Wrench w1 = zero_if_nonfinite(in.command, out.flags);
+  Wrench w2 = passivity_.apply(w1, v, w, out.flags);
+  Wrench limited = limit_magnitude(w2, config_, out.flags);
+
+  // 4: sim staleness ramp.
+  bool stale = in.sim_age_ms > config_.sim_stale_ms;
+  if (stale) {
+    faults_ |= fault_sim_stale;
+    stale_scale_ = std::max(0.0, stale_scale_ - dt_ms / config_.sim_ramp_down_ms);
+  } else {
+    faults_ &= ~fault_sim_stale;
+    stale_scale_ = std::min(1.0, stale_scale_ + dt_ms / config_.engage_ramp_ms);
+  }
+  if (stale || stale_scale_ < 1.0) out.flags |= flag_sim_stale_ramp;
+  Wrench scaled = stale_scale_ * limited;
+
+  // 7 (decided first, applied last): hard gates.
+  bool deadman_released = config_.require_deadman && !in.deadman_pressed;
+  if (deadman_released) out.flags |= flag_deadman_released;
+  bool hard_zero = (faults_ & ~fault_sim_stale) != 0 || deadman_released;
+
+  // 5: engage.
+  if (hard_zero) {
+    engage_ = Engage::disengaged;
+    engage_scale_ = 0;
+  } else if (engage_ == Engage::disengaged) {
+    if (norm(scaled.force_n) < config_.engage_threshold_n && norm(scaled.torque_nm) < config_.engage_threshold_nm)
+      engage_ = Engage::ramping;
+    else
+      out.flags |= flag_waiting_to_engage;
+  }
+  if (engage_ == Engage::ramping) {
+    engage_scale_ = std::min(1.0, engage_scale_ + dt_ms / config_.engage_ramp_ms);
+    out.flags |= flag_engaging;
+    if (engage_scale_ >= 1.0) engage_ = Engage::engaged;
+  }
+  Wrench engaged = engage_scale_ * scaled;
+
+  // 6: rate limit; 7: hard gates.
+  Wrench result = limit_rate(engaged, previous_, config_, out.flags);
+  if (hard_zero) {
+    result = {};
+    out.flags |= flag_hard_zero;
+  }
+
+  // 8: observe what is actually sent.
+  passivity_.observe(result, v, w);
+  previous_ = result;
+  out.wrench = result;
+  out.enable = !hard_zero;
+  out.estop = estop_latched_;
+  out.faults = faults_;
+  return out;
+}
+
+bool SafetyLayer::reset_estop() {
+  if (estop_input_held_) return false;
+  estop_latched_ = false;
+  faults_ &= ~fault_estop;
+  return true;
+}
+
+}  // namespace hapfluid::safety

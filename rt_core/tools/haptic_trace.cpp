@@ -1,0 +1,102 @@
+// haptic-trace: drains haptic-rt's trace ring (/<prefix>.trace) to a CSV file (trace_csv.hpp)
+// as a separate non-RT process. Stops when haptic-rt closes the ring or dies, on SIGINT/SIGTERM,
+// or after --duration. Records it was too slow to read are counted, never waited for.
+//   haptic-trace --out FILE [--shm-prefix NAME] [--duration S] [--wait S]
+#include <signal.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+
+#include "hapfluid/rt/trace_csv.hpp"
+#include "hapfluid/shm/channel.hpp"
+
+using namespace hapfluid;
+
+namespace {
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop.store(true); }
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out_path, prefix = "hapfluid";
+  double duration_s = 0, wait_s = 10;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "haptic-trace: %s needs a value\nusage: haptic-trace --out FILE [--shm-prefix NAME] [--duration S] [--wait S]\n", a.c_str());
+      return 2;
+    }
+    if (a == "--out") out_path = argv[++i];
+    else if (a == "--shm-prefix") prefix = argv[++i];
+    else if (a == "--duration") duration_s = std::atof(argv[++i]);
+    else if (a == "--wait") wait_s = std::atof(argv[++i]);
+    else {
+      std::fprintf(stderr, "haptic-trace: unknown argument \"%s\"\n", a.c_str());
+      return 2;
+    }
+  }
+  if (out_path.empty()) {
+    std::fprintf(stderr, "haptic-trace: --out FILE is required\n");
+    return 2;
+  }
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+
+  const std::string name = shm::segment_name(prefix, shm::ChannelKind::trace);
+  shm::RingAttachment ring;
+  auto give_up = std::chrono::steady_clock::now() + std::chrono::duration<double>(wait_s);
+  for (;;) {
+    try {
+      ring = shm::RingAttachment::attach(name, shm::ChannelKind::trace, sizeof(shm::TraceRecord));
+      break;
+    } catch (const shm::ShmError& e) {
+      if (g_stop || std::chrono::steady_clock::now() > give_up) {
+        std::fprintf(stderr, "haptic-trace: %s\n", e.what());
+        return 2;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  std::FILE* out = std::fopen(out_path.c_str(), "w");
+  if (!out) {
+    std::fprintf(stderr, "haptic-trace: --out %s: cannot create the file\n", out_path.c_str());
+    return 2;
+  }
+  rt::write_trace_header(out, shm::kMaxDevices);
+  // Start at the oldest record still in the ring: haptic-trace may start after haptic-rt.
+  shm::RingReader reader = ring.reader_from_oldest();
+  std::uint64_t rows = 0;
+  auto end = duration_s > 0 ? std::chrono::steady_clock::now() + std::chrono::duration<double>(duration_s)
+                            : std::chrono::steady_clock::time_point::max();
+  shm::TraceRecord record{};
+  std::uint64_t last_check = 0;
+  for (;;) {
+    while (reader.next(record)) {
+      rt::write_trace_row(out, record, shm::kMaxDevices);
+      ++rows;
+    }
+    std::fflush(out);
+    if (g_stop || std::chrono::steady_clock::now() > end) break;
+    std::uint64_t now = shm::monotonic_ns();
+    if (now - last_check > 200'000'000ull) {
+      last_check = now;
+      shm::WriterStatus s = ring.check_liveness(now, 0);
+      if (s != shm::WriterStatus::live) {
+        while (reader.next(record)) rt::write_trace_row(out, record, shm::kMaxDevices), ++rows;
+        std::fprintf(stderr, "haptic-trace: trace ring %s\n", shm::to_string(s));
+        break;
+      }
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::fclose(out);
+  std::fprintf(stderr, "haptic-trace: wrote %llu records to %s, %llu lost (reader too slow)\n",
+               (unsigned long long)rows, out_path.c_str(), (unsigned long long)reader.lost());
+  return 0;
+}

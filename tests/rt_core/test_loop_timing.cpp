@@ -1,0 +1,76 @@
+// The loop's pacing: absolute-time wake-ups on the period grid, and re-phasing after an overrun
+// (missed slots are skipped and counted, never run back to back). A slow device at the device
+// boundary makes every 50th tick take 2.5 ms.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/rt/loop.hpp"
+#include "hapfluid/rt/simulated_device.hpp"
+
+using namespace hapfluid;
+
+namespace {
+
+class SlowDevice final : public device::Device {
+ public:
+  bool poll(device::DeviceState& out) override {
+    if (++polls_ % 50 == 0) {  // a 2.5 ms stall: the next two 1 ms slots are already gone
+      std::uint64_t until = shm::monotonic_ns() + 2'500'000;
+      while (shm::monotonic_ns() < until) {
+      }
+    }
+    return inner_.poll(out);
+  }
+  bool send(const device::DeviceCommand& c) override { return inner_.send(c); }
+  device::DeviceHealth health() const override { return inner_.health(); }
+  const char* name() const override { return "slow"; }
+
+ private:
+  rt::SimulatedDevice inner_{"slow"};
+  std::uint64_t polls_ = 0;
+};
+
+}  // namespace
+
+TEST(LoopTiming, OverrunsAreCountedAndTheLoopRephasesInsteadOfBursting) {
+  config::Rig rig = config::parse_rig(R"(
+[rt]
+trace_ring_records = 1024
+[[devices]]
+name = "slow"
+[devices.transport]
+kind = "loopback"
+address = "/tmp/unused"
+)", "timing-test.toml");
+  rig.rt.shm.prefix = "hapfluid-timing-" + std::to_string(::getpid());
+  std::vector<std::unique_ptr<device::Device>> devices;
+  devices.push_back(std::make_unique<SlowDevice>());
+  rt::RtLoop loop(rig, std::move(devices));
+  loop.run(400'000'000);
+
+  shm::RingReader reader(loop.trace_ring().segment(), 0);
+  shm::TraceRecord r{}, previous{};
+  int records = 0, rephased = 0;
+  while (reader.next(r)) {
+    EXPECT_EQ(r.scheduled_ns % 1'000'000, 0u) << "wake-ups stay on the absolute 1 ms grid";
+    EXPECT_GE(r.wake_ns, r.scheduled_ns) << "never woken early";
+    if (records > 0) {
+      std::uint64_t step = r.scheduled_ns - previous.scheduled_ns;
+      EXPECT_GE(step, 1'000'000u) << "no burst: two ticks never share a slot";
+      if (step > 1'000'000) {
+        // Every skipped slot is counted once (a busy CI machine adds its own late wake-ups).
+        EXPECT_EQ(step, (r.overruns - previous.overruns + 1) * 1'000'000u);
+        EXPECT_TRUE(r.loop_flags & rt::loop_overrun);
+        if (step == 3'000'000) ++rephased;  // a 2.5 ms tick skips the two slots it overran
+      }
+    }
+    previous = r;
+    ++records;
+  }
+  EXPECT_GT(records, 150) << "the loop ran (about 380 ticks on an idle machine)";
+  EXPECT_GE(rephased, 4) << "every 50th tick stalls for 2.5 ms";
+  // The trace's running count matches the loop's (the last tick may still add its own overrun).
+  EXPECT_GE(loop.overruns(), previous.overruns);
+  EXPECT_LE(loop.overruns(), previous.overruns + 3);
+}
