@@ -73,7 +73,10 @@ void read_watchdogs(Reader& r, Watchdogs& w) {
   r.positive("sim_stale_ms", w.sim_stale_ms);
   r.positive("sim_ramp_down_ms", w.sim_ramp_down_ms);
   r.positive("link_timeout_ms", w.link_timeout_ms);
+  r.positive("link_recover_ms", w.link_recover_ms);
   r.positive("engage_threshold_n", w.engage_threshold_n);
+  w.engage_threshold_nm = r.number("engage_threshold_nm", 0.0);
+  r.check("engage_threshold_nm", w.engage_threshold_nm >= 0, "must be >= 0 (0: derived from engage_threshold_n)");
   r.positive("engage_ramp_ms", w.engage_ramp_ms);
   r.positive("device_watchdog_ms", w.device_watchdog_ms);
 }
@@ -91,6 +94,13 @@ RigDevice read_device(Reader& r) {
   if (auto m = r.table("mapping")) d.mapping = read_mapping(*m);
   read_limits(r, d.limits);
   read_watchdogs(r, d.watchdogs);
+  if (auto p = r.table("passivity")) {
+    d.passivity.enabled = p->boolean("enabled", d.passivity.enabled);
+    p->positive("max_damping_n_s_per_m", d.passivity.max_damping_n_s_per_m);
+    p->positive("max_damping_nm_s_per_rad", d.passivity.max_damping_nm_s_per_rad);
+    p->positive("energy_cap_j", d.passivity.energy_cap_j);
+    p->finish();
+  }
   d.wrench_mode = r.choice<WrenchMode>("wrench_mode", WrenchMode::interpolate,
                                        {{"interpolate", WrenchMode::interpolate}, {"coupling", WrenchMode::coupling}});
   d.require_deadman = r.boolean("require_deadman", false);

@@ -131,3 +131,19 @@ TEST(Rig, MissingFileIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("does_not_exist.toml: cannot open rig file"), std::string::npos);
   }
 }
+
+TEST(Rig, PassivityAndRecoverySettingsAreReadAndChecked) {
+  Rig rig = parse_rig(std::string(kMinimalDevice) +
+                          "link_recover_ms = 250\nengage_threshold_nm = 0.02\n"
+                          "passivity = { enabled = false, max_damping_n_s_per_m = 15.0 }\n",
+                      "rig.toml");
+  const RigDevice& d = rig.devices[0];
+  EXPECT_EQ(d.watchdogs.link_recover_ms, 250.0);
+  EXPECT_EQ(d.watchdogs.engage_threshold_nm, 0.02);
+  EXPECT_FALSE(d.passivity.enabled);
+  EXPECT_EQ(d.passivity.max_damping_n_s_per_m, 15.0);
+  EXPECT_EQ(d.passivity.energy_cap_j, 0.2);
+  EXPECT_NE(problems_of(std::string(kMinimalDevice) + "passivity = { energy_cap_j = 0 }\n")
+                .find("devices.left.passivity.energy_cap_j = 0: must be > 0"),
+            std::string::npos);
+}

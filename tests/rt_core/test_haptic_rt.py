@@ -133,9 +133,9 @@ def test_estop_latches_until_an_explicit_reset(binary, tmp_path):
     # SIGUSR1 latches the e-stop: zero at once and it stays zero; SIGUSR2 resets it and the wrench
     # re-engages (0.5 N is below the 1 N engage threshold) through the ramp.
     prefix = unique_prefix("estop")
-    rt = start_rt(binary, RIGS / "one_arm.toml", prefix, tmp_path, 2.5)
+    rt = start_rt(binary, RIGS / "one_arm.toml", prefix, tmp_path, 3.0)
     sim = start_sim(binary, prefix, "--rate", "200", "--force", "0.5,0,0")
-    time.sleep(1.0)
+    time.sleep(1.5)  # start-up, sim attach and the 200 ms engage ramp, with margin for a loaded machine
     estop_ns = time.monotonic_ns()
     rt.send_signal(signal.SIGUSR1)
     time.sleep(0.5)

@@ -220,7 +220,7 @@ TEST(SafetyLayer, EstopLatchesUntilAnExplicitResetWithTheButtonReleased) {
 
 TEST(SafetyLayer, DescribeListsEveryLimitAndItsSource) {
   std::string text = describe(SafetyConfig{});
-  for (const char* key : {"max_force_n", "max_torque_rate_nm_per_s", "sim_stale_ms", "link_recover_ms = 100 (default)",
+  for (const char* key : {"max_force_n", "max_torque_rate_nm_per_s", "sim_stale_ms", "link_recover_ms = 100 (rig)",
                           "passivity"})
     EXPECT_NE(text.find(key), std::string::npos) << key;
   EXPECT_EQ(fault_names(fault_estop | fault_sim_stale), "estop|sim_stale");

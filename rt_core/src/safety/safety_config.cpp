@@ -23,8 +23,14 @@ SafetyConfig make_safety_config(const config::RigDevice& d, std::int64_t period_
   c.engage_threshold_n = w.engage_threshold_n;
   c.engage_ramp_ms = w.engage_ramp_ms;
   c.require_deadman = d.require_deadman;
-  // Torque engage threshold in proportion to the force one, relative to the limits.
-  c.engage_threshold_nm = w.engage_threshold_n * l.max_torque_nm / l.max_force_n;
+  // Unless given, the torque engage threshold is in proportion to the force one, relative to the limits.
+  c.engage_threshold_nm = w.engage_threshold_nm > 0 ? w.engage_threshold_nm
+                                                    : w.engage_threshold_n * l.max_torque_nm / l.max_force_n;
+  c.link_recover_ms = w.link_recover_ms;
+  c.passivity_enabled = d.passivity.enabled;
+  c.passivity_max_damping_n_s_per_m = d.passivity.max_damping_n_s_per_m;
+  c.passivity_max_damping_nm_s_per_rad = d.passivity.max_damping_nm_s_per_rad;
+  c.passivity_energy_cap_j = d.passivity.energy_cap_j;
   return c;
 }
 
@@ -37,9 +43,9 @@ std::string describe(const SafetyConfig& c) {
       "  max_force_rate_n_per_s = %g (rig)\n  max_torque_rate_nm_per_s = %g (rig)\n"
       "  sim_stale_ms = %g, sim_ramp_down_ms = %g (rig)\n  link_timeout_ms = %g (rig)\n"
       "  engage_threshold_n = %g, engage_ramp_ms = %g (rig)\n  require_deadman = %s (rig)\n"
-      "  engage_threshold_nm = %g (default: engage_threshold_n * max_torque_nm / max_force_n)\n"
-      "  link_recover_ms = %g (default)\n"
-      "  passivity: %s, max damping %g N*s/m and %g N*m*s/rad, energy cap %g J (default)\n",
+      "  engage_threshold_nm = %g (rig, or engage_threshold_n * max_torque_nm / max_force_n)\n"
+      "  link_recover_ms = %g (rig)\n"
+      "  passivity: %s, max damping %g N*s/m and %g N*m*s/rad, energy cap %g J (rig)\n",
       c.max_force_n, c.max_torque_nm, c.max_force_axis_n.x, c.max_force_axis_n.y, c.max_force_axis_n.z,
       c.max_torque_axis_nm.x, c.max_torque_axis_nm.y, c.max_torque_axis_nm.z, c.max_force_rate_n_per_s,
       c.max_torque_rate_nm_per_s, c.sim_stale_ms, c.sim_ramp_down_ms, c.link_timeout_ms, c.engage_threshold_n,

@@ -52,9 +52,19 @@ struct Watchdogs {
   double sim_stale_ms = 50.0;        // no fresh sim sample for this long -> ramp the wrench down
   double sim_ramp_down_ms = 100.0;   // ... to zero over this long
   double link_timeout_ms = 5.0;      // no valid frame from the device for this long -> link fault
+  double link_recover_ms = 100.0;    // a faulted link must be healthy this long before forces return
   double engage_threshold_n = 1.0;   // forces engage only once the commanded force is below this
+  double engage_threshold_nm = 0.0;  // ... and the torque below this; 0: threshold_n * max_torque / max_force
   double engage_ramp_ms = 200.0;     // then ramp in over this long
   double device_watchdog_ms = 20.0;  // device firmware: no valid command for this long -> motors off
+};
+
+// Time-domain passivity observer/controller (Hannaford & Ryu 2002) in the 1 kHz loop.
+struct Passivity {
+  bool enabled = true;
+  double max_damping_n_s_per_m = 20.0;        // most damping the controller may add
+  double max_damping_nm_s_per_rad = 0.2;
+  double energy_cap_j = 0.2;                  // the observer's stored-energy reservoir
 };
 
 struct RigDevice {
@@ -64,6 +74,7 @@ struct RigDevice {
   WorkspaceMapping mapping;
   DeviceLimits limits;
   Watchdogs watchdogs;
+  Passivity passivity;
   WrenchMode wrench_mode = WrenchMode::interpolate;
   bool require_deadman = false;  // forces only while the enable/deadman button is held
 };

@@ -1,6 +1,5 @@
-// Every number the safety layer uses, in one struct, built from the rig file. Values the rig
-// schema does not carry yet have safe defaults here; describe() prints all of them at start-up
-// with where each came from, so no limit is ever silent.
+// Every number the safety layer uses, in one struct, built from the rig file (whose own defaults
+// are safe); describe() prints all of them at start-up, so no limit is ever silent.
 #pragma once
 
 #include <string>
@@ -26,7 +25,6 @@ struct SafetyConfig {
   double engage_threshold_n = 1.0;
   double engage_ramp_ms = 200.0;
   bool require_deadman = false;
-  // Not in the rig schema (yet): safe defaults.
   double engage_threshold_nm = 0.05;             // torque counterpart of engage_threshold_n
   double link_recover_ms = 100.0;                // healthy link this long before the link fault clears
   double passivity_max_damping_n_s_per_m = 20.0; // most damping the passivity controller may add
