@@ -12,7 +12,10 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 layout(set = 0, binding = 1) uniform sampler2D source_depth;  // .r: front depth, bilinear
-layout(set = 0, binding = 2, r32f) uniform writeonly image2D smoothed_depth;
+layout(set = 0, binding = 2) uniform writeonly image2D smoothed_depth;
+// Only the 8 x 8 tiles that splats may touch are dispatched (tile x | y << 16, one workgroup
+// each); the rest of the target was cleared to "no fluid" (see fluid_tiles.hpp).
+layout(set = 0, binding = 3, std430) readonly buffer FluidTiles { uint fluid_tiles[]; };
 
 const float inner_weight = 2.0;
 const float outer_weight = 4.0;
@@ -20,7 +23,8 @@ const float outer_weight = 4.0;
 const vec2 outer_offsets[4] = vec2[](vec2(1.5, 0.5), vec2(-0.5, 1.5), vec2(-1.5, -0.5), vec2(0.5, -1.5));
 
 void main() {
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  uint tile = fluid_tiles[gl_WorkGroupID.x];
+  ivec2 pixel = ivec2(uvec2(tile & 0xffffu, tile >> 16) * 8u + gl_LocalInvocationID.xy);
   if (pixel.x >= int(frame.half_viewport.x) || pixel.y >= int(frame.half_viewport.y)) return;
   float inner = texelFetch(source_depth, pixel, 0).r;
   if (inner > frame.splat.w) {  // no fluid here: nothing to smooth

@@ -7,13 +7,16 @@
 // one-sided differences, so silhouettes do not bend normals).
 #include "common.glsl"
 
-layout(local_size_x = 8, local_size_y = 8) in;
+// One workgroup per 16 x 16 pixel tile that may hold fluid (the 8 x 8 half-resolution tiles of
+// the filter); every other pixel was copied from the scene beforehand.
+layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(set = 0, binding = 1) uniform sampler2D scene_colour;   // S_c, full resolution, bilinear
 layout(set = 0, binding = 2) uniform sampler2D scene_depth;    // S_d, full resolution, linear depth
 layout(set = 0, binding = 3) uniform sampler2D smoothed_front; // half resolution
 layout(set = 0, binding = 4) uniform sampler2D splat_depth;    // half resolution: (front, -back)
-layout(set = 0, binding = 5, rgba8) uniform writeonly image2D out_colour;
+layout(set = 0, binding = 5) uniform writeonly image2D out_colour;
+layout(set = 0, binding = 6, std430) readonly buffer FluidTiles { uint fluid_tiles[]; };
 
 layout(push_constant) uniform Push {
   int mode;                // 0: eq. 15; 1: normals as colour; 2: thickness as grey
@@ -42,7 +45,8 @@ vec3 tangent(ivec2 texel, vec3 centre, ivec2 step) {
 }
 
 void main() {
-  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  uint tile = fluid_tiles[gl_WorkGroupID.x];
+  ivec2 pixel = ivec2(uvec2(tile & 0xffffu, tile >> 16) * 16u + gl_LocalInvocationID.xy);
   if (pixel.x >= int(frame.viewport.x) || pixel.y >= int(frame.viewport.y)) return;
   ivec2 texel = min(pixel / 2, half_size() - 1);
   vec4 scene = texelFetch(scene_colour, pixel, 0);

@@ -6,6 +6,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "fluid_tiles.hpp"
 #include "frame_uniforms.hpp"
 #include "gpu_timer.hpp"
 #include "render_targets.hpp"
@@ -55,8 +56,6 @@ VkRenderingAttachmentInfo colour_attachment(const GpuImage& image, VkClearColorV
   return a;
 }
 
-uint32_t groups(uint32_t n) { return (n + 7) / 8; }
-
 }  // namespace
 
 struct FluidRenderer::Impl {
@@ -74,9 +73,13 @@ struct FluidRenderer::Impl {
   GpuTimer timer;
   SceneGeometry geometry;
 
-  HostBuffer uniforms, scene_vertices, fluid_particles, sphere_particles, readback;
+  HostBuffer uniforms, scene_vertices, fluid_particles, sphere_particles, readback, tile_buffer;
   uint32_t fluid_count = 0, sphere_count = 0;
   std::vector<BodyPose> body_poses;
+  std::vector<glm::vec3> fluid_cpu;  // for the tile classification
+  TileGrid grid{};
+  std::vector<uint8_t> tile_marks;
+  std::vector<uint32_t> tiles;
 
   VkSampler sampler = VK_NULL_HANDLE;
   VkDescriptorPool pool = VK_NULL_HANDLE;
@@ -99,6 +102,7 @@ struct FluidRenderer::Impl {
   void create_descriptors();
   void create_pipelines();
   void write_uniforms(const OrbitCamera& camera);
+  void classify_tiles(const OrbitCamera& camera, CompositeMode mode);
   void record(VkCommandBuffer cmd, const OrbitCamera& camera, CompositeMode mode);
   void record_scene(VkCommandBuffer cmd, const glm::mat4& view);
   void record_splat(VkCommandBuffer cmd);
@@ -139,6 +143,11 @@ void FluidRenderer::Impl::create_buffers() {
   ensure_capacity(fluid_particles, 1024 * sizeof(glm::vec3), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   ensure_capacity(sphere_particles, 1024 * sizeof(glm::vec4), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   readback = HostBuffer(ctx, VkDeviceSize(settings.width) * settings.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+  grid = {targets.half.width, targets.half.height};
+  tile_buffer = HostBuffer(ctx, VkDeviceSize(grid.tiles_x()) * grid.tiles_y() * sizeof(uint32_t),
+                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  tile_marks.reserve(size_t(grid.tiles_x()) * grid.tiles_y());
+  tiles.reserve(size_t(grid.tiles_x()) * grid.tiles_y());
 
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   alloc.commandPool = ctx.command_pool();
@@ -163,20 +172,23 @@ void FluidRenderer::Impl::create_descriptors() {
   graphics_set_layout = make_set_layout(d, {binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vf)});
   filter_set_layout = make_set_layout(d, {binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, cs),
                                           binding(1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
-                                          binding(2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, cs)});
+                                          binding(2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, cs),
+                                          binding(3, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs)});
   composite_set_layout = make_set_layout(d, {binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, cs),
                                              binding(1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
                                              binding(2, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
                                              binding(3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
                                              binding(4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
-                                             binding(5, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, cs)});
+                                             binding(5, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, cs),
+                                             binding(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs)});
 
   VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 7},
                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 15},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 6}};
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 6},
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6}};
   VkDescriptorPoolCreateInfo p{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   p.maxSets = 7;
-  p.poolSizeCount = 3;
+  p.poolSizeCount = 4;
   p.pPoolSizes = sizes;
   vk_check(vkCreateDescriptorPool(d, &p, nullptr, &pool), "vkCreateDescriptorPool");
   auto allocate = [&](VkDescriptorSetLayout layout) {
@@ -201,6 +213,16 @@ void FluidRenderer::Impl::create_descriptors() {
     w.pBufferInfo = &ubo;
     vkUpdateDescriptorSets(d, 1, &w, 0, nullptr);
   };
+  VkDescriptorBufferInfo tile_info{tile_buffer.buffer(), 0, VK_WHOLE_SIZE};
+  auto write_tiles = [&](VkDescriptorSet set, uint32_t b) {
+    VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    w.dstSet = set;
+    w.dstBinding = b;
+    w.descriptorCount = 1;
+    w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    w.pBufferInfo = &tile_info;
+    vkUpdateDescriptorSets(d, 1, &w, 0, nullptr);
+  };
   auto write_image = [&](VkDescriptorSet set, uint32_t b, const GpuImage& image, bool storage) {
     VkDescriptorImageInfo info{storage ? VK_NULL_HANDLE : sampler, image.view(),
                                storage ? VK_IMAGE_LAYOUT_GENERAL : VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
@@ -223,6 +245,7 @@ void FluidRenderer::Impl::create_descriptors() {
     write_ubo(filter_sets[i]);
     write_image(filter_sets[i], 1, *filter_io[i][0], false);
     write_image(filter_sets[i], 2, *filter_io[i][1], true);
+    write_tiles(filter_sets[i], 3);
   }
   const GpuImage* smoothed[3] = {&targets.splat, &targets.smoothed_a, &targets.smoothed_b};
   for (int i = 0; i < 3; ++i) {
@@ -233,6 +256,7 @@ void FluidRenderer::Impl::create_descriptors() {
     write_image(composite_sets[i], 3, *smoothed[i], false);
     write_image(composite_sets[i], 4, targets.splat, false);
     write_image(composite_sets[i], 5, targets.output, true);
+    write_tiles(composite_sets[i], 6);
   }
 }
 
@@ -302,6 +326,19 @@ void FluidRenderer::Impl::write_uniforms(const OrbitCamera& camera) {
   u.refraction = {look.refraction_uv_per_m, u.proj[0][0], u.proj[1][1], 0.0f};
   u.floor_params = {float(geometry.checker_size_m), 0, 0, 0};
   std::memcpy(uniforms.mapped(), &u, sizeof u);
+}
+
+void FluidRenderer::Impl::classify_tiles(const OrbitCamera& camera, CompositeMode mode) {
+  if (mode != CompositeMode::fluid) {
+    all_tiles(grid, tiles);  // debug views paint pixels without fluid black
+  } else if (settings.debug_spheres) {
+    tiles.clear();  // no fluid surface: the output is the scene with its spheres
+  } else {
+    find_fluid_tiles(fluid_cpu, splat_radius(), camera.view(),
+                     camera.projection(float(settings.width) / float(settings.height)), camera.near_m, grid, tile_marks,
+                     tiles);
+  }
+  std::memcpy(tile_buffer.mapped(), tiles.data(), tiles.size() * sizeof(uint32_t));
 }
 
 void FluidRenderer::Impl::record_scene(VkCommandBuffer cmd, const glm::mat4&) {
@@ -384,15 +421,23 @@ void FluidRenderer::Impl::record_splat(VkCommandBuffer cmd) {
 
 const GpuImage& FluidRenderer::Impl::record_filter(VkCommandBuffer cmd) {
   if (settings.filter_iterations <= 0) return targets.splat;
+  // Texels outside the dispatched tiles must read as "no fluid" to the next pass.
+  const VkClearColorValue no_fluid{{no_fluid_depth_m, no_fluid_depth_m, no_fluid_depth_m, no_fluid_depth_m}};
+  const VkImageSubresourceRange all{VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+  for (const GpuImage* image : {&targets.smoothed_a, &targets.smoothed_b}) {
+    transition(cmd, *image, state::undefined, state::transfer_dst);
+    vkCmdClearColorImage(cmd, image->image(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &no_fluid, 1, &all);
+    transition(cmd, *image, state::transfer_dst, state::compute_read);
+  }
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, filter_pipeline);
   const GpuImage* destination = nullptr;
   for (int i = 0; i < settings.filter_iterations; ++i) {
     // splat -> a, then a -> b, b -> a, a -> b, ...
     const int set = i == 0 ? 0 : (i % 2 == 1 ? 1 : 2);
     destination = (i % 2 == 0) ? &targets.smoothed_a : &targets.smoothed_b;
-    transition(cmd, *destination, state::undefined, state::compute_write);
+    transition(cmd, *destination, state::compute_read, state::compute_write);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, filter_layout, 0, 1, &filter_sets[set], 0, nullptr);
-    vkCmdDispatch(cmd, groups(targets.half.width), groups(targets.half.height), 1);
+    if (!tiles.empty()) vkCmdDispatch(cmd, uint32_t(tiles.size()), 1, 1);
     transition(cmd, *destination, state::compute_write, state::compute_read);
   }
   return *destination;
@@ -401,18 +446,28 @@ const GpuImage& FluidRenderer::Impl::record_filter(VkCommandBuffer cmd) {
 void FluidRenderer::Impl::record_composite(VkCommandBuffer cmd, CompositeMode mode) {
   const int iterations = settings.filter_iterations;
   const int set = iterations <= 0 ? 0 : (iterations % 2 == 1 ? 1 : 2);
-  transition(cmd, targets.output, state::undefined, state::compute_write);
+  // Pixels outside the fluid tiles are the scene (§5.2: T = 0 copies the scene colour).
+  transition(cmd, targets.scene_colour, state::compute_read, state::transfer_src);
+  transition(cmd, targets.output, state::undefined, state::transfer_dst);
+  VkImageCopy copy{};
+  copy.srcSubresource = copy.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  copy.extent = {targets.full.width, targets.full.height, 1};
+  vkCmdCopyImage(cmd, targets.scene_colour.image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, targets.output.image(),
+                 VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &copy);
+  transition(cmd, targets.scene_colour, state::transfer_src, state::compute_read);
+  transition(cmd, targets.output, state::transfer_dst, state::compute_write);
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, composite_pipeline);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, composite_layout, 0, 1, &composite_sets[set], 0,
                           nullptr);
   CompositePush push{int32_t(mode), settings.thickness_view_max_m};
   vkCmdPushConstants(cmd, composite_layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof push, &push);
-  vkCmdDispatch(cmd, groups(targets.full.width), groups(targets.full.height), 1);
+  if (!tiles.empty()) vkCmdDispatch(cmd, uint32_t(tiles.size()), 1, 1);
   transition(cmd, targets.output, state::compute_write, state::transfer_src);
 }
 
 void FluidRenderer::Impl::record(VkCommandBuffer c, const OrbitCamera& camera, CompositeMode mode) {
   write_uniforms(camera);
+  classify_tiles(camera, mode);
   timer.begin(c);
   record_scene(c, camera.view());
   timer.stamp(c);
@@ -436,9 +491,11 @@ void FluidRenderer::Impl::submit_and_wait() {
 
 FluidRenderer::FluidRenderer(VulkanContext& ctx, const SceneDescription& scene, const RenderSettings& settings)
     : impl_(std::make_unique<Impl>(ctx, scene, settings)) {
-  if (settings.width < 2 || settings.height < 2 || settings.width > 8192 || settings.height > 8192)
+  if (settings.width < 16 || settings.height < 16 || settings.width > 8192 || settings.height > 8192 ||
+      settings.width % 2 || settings.height % 2)
     throw std::runtime_error("render: output size " + std::to_string(settings.width) + "x" +
-                             std::to_string(settings.height) + " must be 2..8192 pixels on each side");
+                             std::to_string(settings.height) +
+                             " must be even and 16..8192 pixels on each side (fluid buffers are half of it)");
   if (settings.filter_iterations < 0 || settings.filter_iterations > 64)
     throw std::runtime_error("render: filter iterations must be 0..64");
   if (!(scene.particle_radius_m > 0)) throw std::runtime_error("render: the particle radius must be > 0 m");
@@ -454,6 +511,7 @@ FluidRenderer::~FluidRenderer() = default;
 void FluidRenderer::set_frame(const Frame& frame) {
   Impl& m = *impl_;
   m.body_poses = frame.body_poses;
+  m.fluid_cpu.assign(frame.fluid_m.begin(), frame.fluid_m.end());
   m.fluid_count = uint32_t(frame.fluid_m.size());
   m.ensure_capacity(m.fluid_particles, frame.fluid_m.size() * sizeof(glm::vec3), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   std::memcpy(m.fluid_particles.mapped(), frame.fluid_m.data(), frame.fluid_m.size() * sizeof(glm::vec3));

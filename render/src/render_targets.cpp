@@ -49,7 +49,7 @@ TargetFormats choose_formats(const VulkanContext& ctx) {
                          VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, "depth buffer");
   t.output = first_with(ctx, {VK_FORMAT_R8G8B8A8_UNORM},
                         VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT |
-                            VK_FORMAT_FEATURE_BLIT_SRC_BIT,
+                            VK_FORMAT_FEATURE_TRANSFER_DST_BIT | VK_FORMAT_FEATURE_BLIT_SRC_BIT,
                         "output image");
   t.summary = std::string("splat ") + name(t.splat) + " (blend+linear), filter " + name(t.smoothed) +
               " (storage+linear), scene depth " + name(t.scene_depth);
@@ -63,9 +63,11 @@ RenderTargets::RenderTargets(VulkanContext& ctx, const TargetFormats& f, VkExten
   scene_depth = GpuImage(ctx, full, f.scene_depth, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | sampled);
   zbuffer = GpuImage(ctx, full, f.zbuffer, VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT, VK_IMAGE_ASPECT_DEPTH_BIT);
   splat = GpuImage(ctx, half, f.splat, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | sampled);
-  smoothed_a = GpuImage(ctx, half, f.smoothed, VK_IMAGE_USAGE_STORAGE_BIT | sampled);
-  smoothed_b = GpuImage(ctx, half, f.smoothed, VK_IMAGE_USAGE_STORAGE_BIT | sampled);
-  output = GpuImage(ctx, full, f.output, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
+  const VkImageUsageFlags cleared = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | sampled;
+  smoothed_a = GpuImage(ctx, half, f.smoothed, cleared);
+  smoothed_b = GpuImage(ctx, half, f.smoothed, cleared);
+  output = GpuImage(ctx, full, f.output,
+                    VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
 }
 
 }  // namespace hapfluid::render
