@@ -74,6 +74,7 @@ struct FluidRenderer::Impl {
   SceneGeometry geometry;
 
   HostBuffer uniforms, scene_vertices, fluid_particles, sphere_particles, readback, tile_buffer;
+  size_t fluid_capacity = 0;
   uint32_t fluid_count = 0, sphere_count = 0;
   std::vector<BodyPose> body_poses;
   std::vector<glm::vec3> fluid_cpu;  // for the tile classification
@@ -109,6 +110,8 @@ struct FluidRenderer::Impl {
   const GpuImage& record_filter(VkCommandBuffer cmd);
   void record_composite(VkCommandBuffer cmd, CompositeMode mode);
   void ensure_capacity(HostBuffer& buffer, size_t bytes, VkBufferUsageFlags usage);
+  void ensure_fluid_capacity(size_t particles);
+  void write_particle_binding();
   void submit_and_wait();
 };
 
@@ -134,13 +137,30 @@ void FluidRenderer::Impl::ensure_capacity(HostBuffer& buffer, size_t bytes, VkBu
   buffer = HostBuffer(ctx, std::max<size_t>(bytes + bytes / 2, 256), usage);
 }
 
+void FluidRenderer::Impl::ensure_fluid_capacity(size_t particles) {
+  if (particles <= fluid_capacity && fluid_particles.buffer()) return;
+  fluid_capacity = std::max<size_t>(particles + particles / 2, 1024);
+  ensure_capacity(fluid_particles, fluid_capacity * sizeof(glm::vec3), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  write_particle_binding();
+}
+
+void FluidRenderer::Impl::write_particle_binding() {
+  VkDescriptorBufferInfo info{fluid_particles.buffer(), 0, VK_WHOLE_SIZE};
+  VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+  w.dstSet = graphics_set;
+  w.dstBinding = 1;
+  w.descriptorCount = 1;
+  w.descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+  w.pBufferInfo = &info;
+  vkUpdateDescriptorSets(ctx.device(), 1, &w, 0, nullptr);
+}
+
 void FluidRenderer::Impl::create_buffers() {
   uniforms = HostBuffer(ctx, sizeof(FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
   geometry = build_scene_geometry(scene);
   scene_vertices = HostBuffer(ctx, std::max<size_t>(geometry.vertices.size() * sizeof(SceneVertex), 64),
                               VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   std::memcpy(scene_vertices.mapped(), geometry.vertices.data(), geometry.vertices.size() * sizeof(SceneVertex));
-  ensure_capacity(fluid_particles, 1024 * sizeof(glm::vec3), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   ensure_capacity(sphere_particles, 1024 * sizeof(glm::vec4), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
   readback = HostBuffer(ctx, VkDeviceSize(settings.width) * settings.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
   grid = {targets.half.width, targets.half.height};
@@ -169,7 +189,8 @@ void FluidRenderer::Impl::create_descriptors() {
 
   const VkShaderStageFlags vf = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
   const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
-  graphics_set_layout = make_set_layout(d, {binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vf)});
+  graphics_set_layout = make_set_layout(d, {binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, vf),
+                                            binding(1, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, VK_SHADER_STAGE_VERTEX_BIT)});
   filter_set_layout = make_set_layout(d, {binding(0, VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, cs),
                                           binding(1, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
                                           binding(2, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, cs),
@@ -185,7 +206,7 @@ void FluidRenderer::Impl::create_descriptors() {
   VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 7},
                                   {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 15},
                                   {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 6},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6}};
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7}};
   VkDescriptorPoolCreateInfo p{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   p.maxSets = 7;
   p.poolSizeCount = 4;
@@ -237,6 +258,7 @@ void FluidRenderer::Impl::create_descriptors() {
 
   graphics_set = allocate(graphics_set_layout);
   write_ubo(graphics_set);
+  ensure_fluid_capacity(1024);  // also writes binding 1
   const GpuImage* filter_io[3][2] = {{&targets.splat, &targets.smoothed_a},
                                      {&targets.smoothed_a, &targets.smoothed_b},
                                      {&targets.smoothed_b, &targets.smoothed_a}};
@@ -293,9 +315,7 @@ void FluidRenderer::Impl::create_pipelines() {
   GraphicsPipelineDesc splat_desc;
   splat_desc.vertex = HAPFLUID_SHADER(splat_vert);
   splat_desc.fragment = HAPFLUID_SHADER(splat_frag);
-  splat_desc.bindings = {{0, sizeof(glm::vec3), VK_VERTEX_INPUT_RATE_INSTANCE}};
-  splat_desc.attributes = {{0, 0, VK_FORMAT_R32G32B32_SFLOAT, 0}};
-  splat_desc.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP;
+  splat_desc.topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST;
   splat_desc.colour_formats = {formats.splat};
   splat_desc.blends = {min_blend()};
   splat_desc.layout = splat_layout;
@@ -410,10 +430,7 @@ void FluidRenderer::Impl::record_splat(VkCommandBuffer cmd) {
     set_viewport(cmd, targets.half);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, splat_pipeline);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, splat_layout, 0, 1, &graphics_set, 0, nullptr);
-    VkDeviceSize offset = 0;
-    VkBuffer pb = fluid_particles.buffer();
-    vkCmdBindVertexBuffers(cmd, 0, 1, &pb, &offset);
-    vkCmdDraw(cmd, 4, instances, 0, 0);
+    vkCmdDraw(cmd, 3 * instances, 1, 0, 0);  // one triangle per particle (splat.vert)
   }
   vkCmdEndRendering(cmd);
   transition(cmd, targets.splat, state::colour_target, state::compute_read);
@@ -513,7 +530,7 @@ void FluidRenderer::set_frame(const Frame& frame) {
   m.body_poses = frame.body_poses;
   m.fluid_cpu.assign(frame.fluid_m.begin(), frame.fluid_m.end());
   m.fluid_count = uint32_t(frame.fluid_m.size());
-  m.ensure_capacity(m.fluid_particles, frame.fluid_m.size() * sizeof(glm::vec3), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+  m.ensure_fluid_capacity(frame.fluid_m.size());
   std::memcpy(m.fluid_particles.mapped(), frame.fluid_m.data(), frame.fluid_m.size() * sizeof(glm::vec3));
   m.sphere_count = 0;
   if (m.settings.debug_spheres) {
