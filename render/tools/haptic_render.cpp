@@ -37,13 +37,14 @@ options:
   --dump-buffers         also write depth, smoothed depth, thickness and normals images
   --camera-distance M --camera-yaw DEG --camera-pitch DEG
   --no-mp4               never run ffmpeg
+  --screenshot FILE      windowed, with --frames: save the last presented image (overlay included)
   --timings              print the GPU time of every pass of every frame
   --validation           enable VK_LAYER_KHRONOS_validation; exit 3 if it reports anything
 )";
 
 struct Args {
   bool headless = false, spheres = false, dump = false, mp4 = true, timings = false, validation = false;
-  std::string out, replay, scene, kind_field = "kind", synthetic;
+  std::string out, replay, scene, kind_field = "kind", synthetic, screenshot;
   long frames = -1, particles = 32768;
   double duration = -1;
   RenderSettings settings;
@@ -90,12 +91,14 @@ Args parse(int argc, char** argv) {
     else if (o == "--camera-yaw") a.camera.yaw_deg = float(number("--camera-yaw", value(), -360, 360));
     else if (o == "--camera-pitch") a.camera.pitch_deg = float(number("--camera-pitch", value(), -89, 89));
     else if (o == "--no-mp4") a.mp4 = false;
+    else if (o == "--screenshot") a.screenshot = value();
     else if (o == "--timings") a.timings = true;
     else if (o == "--validation") a.validation = true;
     else bad("unknown option " + o);
   }
   a.settings.debug_spheres = a.spheres;
   if (a.headless && a.out.empty()) bad("--headless needs --out DIR");
+  if (!a.screenshot.empty() && (a.headless || a.frames < 0)) bad("--screenshot needs the windowed mode and --frames N");
   if (!a.replay.empty() && !a.synthetic.empty()) bad("give either --replay or --synthetic, not both");
   if (!a.synthetic.empty() && a.synthetic != "ball" && a.synthetic != "pool")
     bad("--synthetic " + a.synthetic + ": must be \"ball\" or \"pool\"");
@@ -143,7 +146,14 @@ int main(int argc, char** argv) {
       h.validation = a.validation;
       summary = run_headless(*source, h);
     } else {
-      bad("windowed mode is not built yet");
+      WindowOptions w;
+      w.max_frames = a.frames;
+      w.duration_s = a.duration;
+      w.settings = a.settings;
+      w.camera = a.camera;
+      w.validation = a.validation;
+      w.screenshot = a.screenshot;
+      summary = run_windowed(*source, w);
     }
     if (a.validation && summary.validation_messages > 0) {
       std::fprintf(stderr, "haptic-render: the validation layer reported %d messages\n", summary.validation_messages);

@@ -42,6 +42,7 @@ struct WindowOptions {
   RenderSettings settings;
   CameraOverrides camera;
   bool validation = false;
+  std::filesystem::path screenshot;  // with max_frames: the last presented image as PNG
 };
 
 RunSummary run_windowed(FrameSource& source, const WindowOptions& options);

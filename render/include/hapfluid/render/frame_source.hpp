@@ -44,12 +44,22 @@ struct SceneDescription {
   double view_distance_m = 1.5;     // default camera distance
 };
 
+// A haptic device's rendered force, for the on-screen force bars (from the device-states
+// channel in live mode; replays have none).
+struct DeviceForce {
+  std::string device;
+  float force_n = 0.0f;
+  float max_force_n = 1.0f;  // the rig's limit: a full bar
+};
+
 struct Frame {
   std::uint64_t index = 0;
   double sim_time_s = 0.0;
   std::vector<glm::vec3> fluid_m;   // fluid particle centres
   std::vector<glm::vec3> solid_m;   // boundary and body particles (debug spheres mode only)
   std::vector<BodyPose> body_poses; // one per SceneDescription::bodies entry
+  std::vector<DeviceForce> device_forces;
+  double sim_steps_per_s = 0.0;     // as reported by the simulator, 0 when unknown
 };
 
 enum class FrameStatus {

@@ -1,0 +1,359 @@
+// Windowed mode: the same FluidRenderer, its output image blitted to a GLFW window's swapchain
+// image, statistics drawn on top. One frame in flight: the particle upload for the next frame
+// waits for the previous one (the renderer's buffers are single).
+#include <volk.h>
+#define GLFW_INCLUDE_VULKAN
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <stdexcept>
+
+#include "hapfluid/render/apps.hpp"
+#include "text_overlay.hpp"
+#include "vk_resources.hpp"
+
+namespace hapfluid::render {
+namespace {
+
+struct Input {
+  OrbitCamera* camera = nullptr;
+  bool dragging = false;
+  double last_x = 0, last_y = 0;
+};
+
+void on_mouse_button(GLFWwindow* w, int button, int action, int) {
+  auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
+  if (button != GLFW_MOUSE_BUTTON_LEFT) return;
+  in->dragging = action == GLFW_PRESS;
+  glfwGetCursorPos(w, &in->last_x, &in->last_y);
+}
+
+void on_cursor(GLFWwindow* w, double x, double y) {
+  auto* in = static_cast<Input*>(glfwGetWindowUserPointer(w));
+  if (!in->dragging) return;
+  in->camera->orbit(-0.005f * float(x - in->last_x), 0.005f * float(y - in->last_y));
+  in->last_x = x, in->last_y = y;
+}
+
+void on_scroll(GLFWwindow* w, double, double dy) {
+  static_cast<Input*>(glfwGetWindowUserPointer(w))->camera->zoom(dy > 0 ? 0.9f : 1.0f / 0.9f);
+}
+
+void on_key(GLFWwindow* w, int key, int, int action, int) {
+  if (key == GLFW_KEY_ESCAPE && action == GLFW_PRESS) glfwSetWindowShouldClose(w, GLFW_TRUE);
+}
+
+class Swapchain {
+ public:
+  Swapchain(VulkanContext& ctx, VkSurfaceKHR surface, GLFWwindow* window) : ctx_(ctx), surface_(surface) {
+    VkBool32 present = VK_FALSE;
+    vkGetPhysicalDeviceSurfaceSupportKHR(ctx.physical_device(), ctx.queue_family(), surface, &present);
+    if (!present) throw std::runtime_error("Vulkan: the graphics queue cannot present to this window");
+    uint32_t count = 0;
+    vkGetPhysicalDeviceSurfaceFormatsKHR(ctx.physical_device(), surface, &count, nullptr);
+    std::vector<VkSurfaceFormatKHR> formats(count);
+    vkGetPhysicalDeviceSurfaceFormatsKHR(ctx.physical_device(), surface, &count, formats.data());
+    if (formats.empty()) throw std::runtime_error("Vulkan: the window surface offers no formats");
+    format_ = formats[0].format;
+    colour_space_ = formats[0].colorSpace;
+    for (const auto& f : formats)
+      if (f.format == VK_FORMAT_B8G8R8A8_UNORM || f.format == VK_FORMAT_R8G8B8A8_UNORM) {
+        format_ = f.format;
+        colour_space_ = f.colorSpace;
+        break;
+      }
+    create(window);
+  }
+  ~Swapchain() { destroy(); }
+
+  void create(GLFWwindow* window) {
+    VkSurfaceCapabilitiesKHR caps;
+    vk_check(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(ctx_.physical_device(), surface_, &caps),
+             "vkGetPhysicalDeviceSurfaceCapabilitiesKHR");
+    const VkImageUsageFlags usage =
+        VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
+    if ((caps.supportedUsageFlags & usage) != usage)
+      throw std::runtime_error("Vulkan: swapchain images cannot be blit targets, copy sources and colour attachments here");
+    int w = 0, h = 0;
+    glfwGetFramebufferSize(window, &w, &h);
+    extent_ = caps.currentExtent.width != UINT32_MAX ? caps.currentExtent : VkExtent2D{uint32_t(w), uint32_t(h)};
+    extent_.width = std::clamp(extent_.width, caps.minImageExtent.width, caps.maxImageExtent.width);
+    extent_.height = std::clamp(extent_.height, caps.minImageExtent.height, caps.maxImageExtent.height);
+    VkSwapchainCreateInfoKHR info{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
+    info.surface = surface_;
+    info.minImageCount = std::max(caps.minImageCount, 2u);
+    if (caps.maxImageCount) info.minImageCount = std::min(info.minImageCount, caps.maxImageCount);
+    info.imageFormat = format_;
+    info.imageColorSpace = colour_space_;
+    info.imageExtent = extent_;
+    info.imageArrayLayers = 1;
+    info.imageUsage = usage;
+    info.imageSharingMode = VK_SHARING_MODE_EXCLUSIVE;
+    info.preTransform = caps.currentTransform;
+    info.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
+    info.presentMode = VK_PRESENT_MODE_FIFO_KHR;  // always available; paced by the display
+    info.clipped = VK_TRUE;
+    vk_check(vkCreateSwapchainKHR(ctx_.device(), &info, nullptr, &swapchain_), "vkCreateSwapchainKHR");
+    uint32_t count = 0;
+    vkGetSwapchainImagesKHR(ctx_.device(), swapchain_, &count, nullptr);
+    images_.resize(count);
+    vkGetSwapchainImagesKHR(ctx_.device(), swapchain_, &count, images_.data());
+    for (VkImage image : images_) {
+      VkImageViewCreateInfo v{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
+      v.image = image;
+      v.viewType = VK_IMAGE_VIEW_TYPE_2D;
+      v.format = format_;
+      v.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
+      VkImageView view;
+      vk_check(vkCreateImageView(ctx_.device(), &v, nullptr, &view), "vkCreateImageView (swapchain)");
+      views_.push_back(view);
+    }
+    VkSemaphoreCreateInfo s{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    render_done_.resize(count);
+    for (auto& sem : render_done_) vk_check(vkCreateSemaphore(ctx_.device(), &s, nullptr, &sem), "vkCreateSemaphore");
+  }
+
+  void destroy() {
+    vkDeviceWaitIdle(ctx_.device());
+    for (VkImageView v : views_) vkDestroyImageView(ctx_.device(), v, nullptr);
+    for (VkSemaphore s : render_done_) vkDestroySemaphore(ctx_.device(), s, nullptr);
+    views_.clear();
+    render_done_.clear();
+    images_.clear();
+    if (swapchain_) vkDestroySwapchainKHR(ctx_.device(), swapchain_, nullptr);
+    swapchain_ = VK_NULL_HANDLE;
+  }
+
+  void recreate(GLFWwindow* window) {
+    destroy();
+    create(window);
+  }
+
+  VkSwapchainKHR handle() const { return swapchain_; }
+  VkFormat format() const { return format_; }
+  VkExtent2D extent() const { return extent_; }
+  VkImage image(uint32_t i) const { return images_[i]; }
+  VkImageView view(uint32_t i) const { return views_[i]; }
+  VkSemaphore render_done(uint32_t i) const { return render_done_[i]; }
+
+ private:
+  VulkanContext& ctx_;
+  VkSurfaceKHR surface_;
+  VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
+  VkFormat format_ = VK_FORMAT_UNDEFINED;
+  VkColorSpaceKHR colour_space_{};
+  VkExtent2D extent_{};
+  std::vector<VkImage> images_;
+  std::vector<VkImageView> views_;
+  std::vector<VkSemaphore> render_done_;  // one per image: reused only after that image returns
+};
+
+struct GlfwSession {
+  GlfwSession() {
+    if (!glfwInit())
+      throw std::runtime_error("GLFW: cannot initialise (no display? run under a desktop or xvfb-run, or use --headless)");
+  }
+  ~GlfwSession() { glfwTerminate(); }
+};
+
+void draw_stats(TextOverlay& overlay, const Frame& frame, double render_fps, double frames_per_s, const PassTimes& t) {
+  overlay.clear();
+  overlay.rectangle({8, 8}, {430, 150 + 30.0f * float(frame.device_forces.size())}, {0.0f, 0.0f, 0.0f, 0.55f});
+  char line[160];
+  std::snprintf(line, sizeof line, "render %.1f frames/s   GPU %.1f ms", render_fps, t.total_ms);
+  overlay.text({18, 18}, line);
+  std::snprintf(line, sizeof line, "  scene %.1f  splat %.1f  filter %.1f  composite %.1f ms", t.scene_ms, t.splat_ms,
+                t.filter_ms, t.composite_ms);
+  overlay.text({18, 44}, line, {0.8f, 0.8f, 0.8f, 1.0f});
+  if (frame.sim_steps_per_s > 0)
+    std::snprintf(line, sizeof line, "sim %.0f steps/s   t = %.2f s", frame.sim_steps_per_s, frame.sim_time_s);
+  else
+    std::snprintf(line, sizeof line, "sim frames %.1f /s   t = %.2f s", frames_per_s, frame.sim_time_s);
+  overlay.text({18, 72}, line);
+  std::snprintf(line, sizeof line, "%zu fluid particles", frame.fluid_m.size());
+  overlay.text({18, 100}, line);
+  float y = 130;
+  for (const DeviceForce& d : frame.device_forces) {
+    const float fraction = std::clamp(d.force_n / std::max(d.max_force_n, 1e-6f), 0.0f, 1.0f);
+    std::snprintf(line, sizeof line, "%s %.1f N", d.device.c_str(), d.force_n);
+    overlay.text({18, y}, line);
+    overlay.rectangle({200, y}, {420, y + 16}, {0.3f, 0.3f, 0.3f, 0.8f});
+    overlay.rectangle({200, y}, {200 + 220 * fraction, y + 16},
+                      fraction > 0.9f ? glm::vec4(0.9f, 0.2f, 0.1f, 1.0f) : glm::vec4(0.2f, 0.8f, 0.3f, 1.0f));
+    y += 30;
+  }
+}
+
+}  // namespace
+
+RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
+  GlfwSession glfw;
+  if (!glfwVulkanSupported()) throw std::runtime_error("GLFW: no Vulkan loader found for the window");
+  glfwWindowHint(GLFW_CLIENT_API, GLFW_NO_API);
+  GLFWwindow* window = glfwCreateWindow(int(options.settings.width), int(options.settings.height),
+                                        ("haptic-render: " + source.scene().name).c_str(), nullptr, nullptr);
+  if (!window) throw std::runtime_error("GLFW: cannot create a window");
+  uint32_t ext_count = 0;
+  const char** ext = glfwGetRequiredInstanceExtensions(&ext_count);
+  ContextOptions ctx_options{options.validation, {}, true};
+  for (uint32_t i = 0; i < ext_count; ++i) ctx_options.instance_extensions.emplace_back(ext[i]);
+
+  RunSummary summary;
+  {
+    VulkanContext ctx(ctx_options);
+    VkSurfaceKHR surface;
+    vk_check(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &surface), "glfwCreateWindowSurface");
+    {
+      FluidRenderer renderer(ctx, source.scene(), options.settings);
+      OrbitCamera camera = renderer.camera();
+      options.camera.apply(camera);
+      Input input{&camera};
+      glfwSetWindowUserPointer(window, &input);
+      glfwSetMouseButtonCallback(window, on_mouse_button);
+      glfwSetCursorPosCallback(window, on_cursor);
+      glfwSetScrollCallback(window, on_scroll);
+      glfwSetKeyCallback(window, on_key);
+      Swapchain swapchain(ctx, surface, window);
+      TextOverlay overlay(ctx, swapchain.format());
+      std::fprintf(stderr, "haptic-render: window on %s\n", renderer.describe().c_str());
+
+      VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+      alloc.commandPool = ctx.command_pool();
+      alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+      alloc.commandBufferCount = 1;
+      VkCommandBuffer cmd;
+      vk_check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
+      VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+      fence_info.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+      VkFence fence;
+      vk_check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
+      VkSemaphoreCreateInfo sem_info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+      VkSemaphore acquired;
+      vk_check(vkCreateSemaphore(ctx.device(), &sem_info, nullptr, &acquired), "vkCreateSemaphore");
+
+      HostBuffer screenshot;
+      VkExtent2D screenshot_extent{};
+      Frame frame;
+      bool have_frame = false;
+      double render_fps = 0, source_fps = 0;
+      auto last = std::chrono::steady_clock::now();
+      const auto start = last;
+      auto last_source = last;
+      while (!glfwWindowShouldClose(window)) {
+        if (options.max_frames >= 0 && summary.frames >= options.max_frames) break;
+        const auto now = std::chrono::steady_clock::now();
+        if (options.duration_s >= 0 && std::chrono::duration<double>(now - start).count() >= options.duration_s) break;
+        glfwPollEvents();
+        // The newest frame, never waiting for one: a finished replay keeps showing its last frame.
+        const bool fresh = source.next_frame(frame) == FrameStatus::new_frame;
+        if (fresh) {
+          const double dt = std::chrono::duration<double>(now - last_source).count();
+          if (have_frame && dt > 0) source_fps = 0.9 * source_fps + 0.1 / dt;
+          last_source = now;
+          have_frame = true;
+        }
+
+        vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+        const PassTimes times = renderer.pass_times();
+        uint32_t index = 0;
+        VkResult acquire = vkAcquireNextImageKHR(ctx.device(), swapchain.handle(), UINT64_MAX, acquired, VK_NULL_HANDLE, &index);
+        if (acquire == VK_ERROR_OUT_OF_DATE_KHR) {
+          swapchain.recreate(window);
+          continue;
+        }
+        if (acquire != VK_SUBOPTIMAL_KHR) vk_check(acquire, "vkAcquireNextImageKHR");
+        vk_check(vkResetFences(ctx.device(), 1, &fence), "vkResetFences");
+
+        renderer.set_camera(camera);
+        if (fresh) renderer.set_frame(frame);  // the GPU is done with the previous one (fence)
+        draw_stats(overlay, frame, render_fps, source_fps, times);
+
+        vk_check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
+        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        vk_check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
+        renderer.record(cmd);
+        const VkImage target = swapchain.image(index);
+        transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::undefined, state::transfer_dst);
+        const VkExtent2D src = renderer.output_extent(), dst = swapchain.extent();
+        VkImageBlit blit{};
+        blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+        blit.srcOffsets[1] = {int32_t(src.width), int32_t(src.height), 1};
+        blit.dstOffsets[1] = {int32_t(dst.width), int32_t(dst.height), 1};
+        vkCmdBlitImage(cmd, renderer.output_image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
+                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_LINEAR);
+        transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_dst, state::colour_target);
+        overlay.record(cmd, swapchain.view(index), dst);
+        const bool last_frame = options.max_frames >= 0 && summary.frames + 1 == options.max_frames;
+        const bool take_screenshot = last_frame && !options.screenshot.empty();
+        if (take_screenshot) {  // exactly what is presented, overlay included
+          screenshot = HostBuffer(ctx, VkDeviceSize(dst.width) * dst.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+          transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::colour_target, state::transfer_src);
+          VkBufferImageCopy copy{};
+          copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+          copy.imageExtent = {dst.width, dst.height, 1};
+          vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot.buffer(), 1, &copy);
+          transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_src, state::present);
+          screenshot_extent = dst;
+        } else {
+          transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::colour_target, state::present);
+        }
+        vk_check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+
+        VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_TRANSFER_BIT;
+        VkSemaphore done = swapchain.render_done(index);
+        VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+        submit.waitSemaphoreCount = 1;
+        submit.pWaitSemaphores = &acquired;
+        submit.pWaitDstStageMask = &wait_stage;
+        submit.commandBufferCount = 1;
+        submit.pCommandBuffers = &cmd;
+        submit.signalSemaphoreCount = 1;
+        submit.pSignalSemaphores = &done;
+        vk_check(vkQueueSubmit(ctx.queue(), 1, &submit, fence), "vkQueueSubmit");
+        VkPresentInfoKHR present{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+        present.waitSemaphoreCount = 1;
+        present.pWaitSemaphores = &done;
+        present.swapchainCount = 1;
+        VkSwapchainKHR handle = swapchain.handle();
+        present.pSwapchains = &handle;
+        present.pImageIndices = &index;
+        VkResult presented = vkQueuePresentKHR(ctx.queue(), &present);
+        if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR) {
+          vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+          swapchain.recreate(window);
+        } else {
+          vk_check(presented, "vkQueuePresentKHR");
+        }
+        ++summary.frames;
+        const auto after = std::chrono::steady_clock::now();
+        const double dt = std::chrono::duration<double>(after - last).count();
+        last = after;
+        if (dt > 0) render_fps = render_fps == 0 ? 1.0 / dt : 0.9 * render_fps + 0.1 / dt;
+        summary.mean_frame_ms += times.total_ms;
+      }
+      vkDeviceWaitIdle(ctx.device());
+      if (screenshot.buffer()) {
+        Rgba8Image image{screenshot_extent.width, screenshot_extent.height, {}};
+        const auto* bytes = static_cast<const uint8_t*>(screenshot.mapped());
+        image.rgba.assign(bytes, bytes + size_t(image.width) * image.height * 4);
+        if (swapchain.format() == VK_FORMAT_B8G8R8A8_UNORM)
+          for (size_t i = 0; i < image.rgba.size(); i += 4) std::swap(image.rgba[i], image.rgba[i + 2]);
+        write_png(options.screenshot, image);
+      }
+      vkDestroySemaphore(ctx.device(), acquired, nullptr);
+      vkDestroyFence(ctx.device(), fence, nullptr);
+      vkFreeCommandBuffers(ctx.device(), ctx.command_pool(), 1, &cmd);
+      if (summary.frames) summary.mean_frame_ms /= double(summary.frames);
+      std::fprintf(stderr, "haptic-render: presented %ld frames (%.1f frames/s at the end)\n", summary.frames, render_fps);
+    }
+    vkDestroySurfaceKHR(ctx.instance(), surface, nullptr);
+    summary.validation_messages = ctx.validation_errors() + ctx.validation_warnings();
+  }
+  glfwDestroyWindow(window);
+  return summary;
+}
+
+}  // namespace hapfluid::render
