@@ -237,6 +237,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
       VkExtent2D screenshot_extent{};
       Frame frame;
       bool have_frame = false;
+      double first_sim_time_s = 0.0;
       double render_fps = 0, source_fps = 0;
       auto last = std::chrono::steady_clock::now();
       const auto start = last;
@@ -247,7 +248,11 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
         if (options.duration_s >= 0 && std::chrono::duration<double>(now - start).count() >= options.duration_s) break;
         glfwPollEvents();
         // The newest frame, never waiting for one: a finished replay keeps showing its last frame.
-        const bool fresh = source.next_frame(frame) == FrameStatus::new_frame;
+        // A recording (finite source) plays at its own pace: the next frame once its sim time is due.
+        const double wall_s = std::chrono::duration<double>(now - start).count();
+        const bool due = !have_frame || source.frame_count() < 0 || frame.sim_time_s - first_sim_time_s <= wall_s;
+        const bool fresh = due && source.next_frame(frame) == FrameStatus::new_frame;
+        if (fresh && !have_frame) first_sim_time_s = frame.sim_time_s;
         if (fresh) {
           const double dt = std::chrono::duration<double>(now - last_source).count();
           if (have_frame && dt > 0) source_fps = 0.9 * source_fps + 0.1 / dt;

@@ -105,6 +105,9 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
+// The frame sources. The live one (the sim's particles channel, rt_core's hapfluid_shm) plugs in
+// here as another FrameSource whose next_frame() copies the newest complete frame without
+// blocking the writer and returns FrameStatus::unchanged when there is nothing newer.
 std::unique_ptr<FrameSource> make_source(const Args& a) {
   if (!a.replay.empty()) {
     const std::filesystem::path scene_file = a.scene.empty() ? std::filesystem::path(a.replay) / "scene.toml" : std::filesystem::path(a.scene);
