@@ -57,22 +57,23 @@ std::string run_case(VulkanContext& ctx, const Case& c, int frames) {
   const double p95 = sorted[std::min(sorted.size() - 1, size_t(0.95 * double(sorted.size())))];
   // The fastest frame: what the pipeline costs when the shared machine leaves it alone.
   const double best = sorted.front();
+  const double median = sorted[sorted.size() / 2];
   const double n = frames;
   char json[1024];
   std::snprintf(json, sizeof json,
                 "{\"bench\": \"bench_render\", \"params\": {\"particles\": %u, \"width\": %u, \"height\": %u, "
                 "\"filter_iterations\": %d, \"fluid_buffer_scale\": 0.5, \"device\": \"%s\"}, "
                 "\"metrics\": {\"ms_per_frame\": %.2f, \"frames_per_s\": %.2f, \"p95_ms_per_frame\": %.2f, "
-                "\"min_ms_per_frame\": %.2f, "
+                "\"min_ms_per_frame\": %.2f, \"median_ms_per_frame\": %.2f, "
                 "\"gpu_ms_per_frame\": %.2f, \"scene_ms\": %.2f, \"splat_ms\": %.2f, \"filter_ms\": %.2f, "
                 "\"composite_ms\": %.2f, \"readback_ms\": %.2f}}",
                 c.particles, c.width, c.height, c.filter_iterations, ctx.properties().deviceName, mean(wall),
-                1000.0 / mean(wall), p95, best, mean(gpu), sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n,
+                1000.0 / mean(wall), p95, best, median, mean(gpu), sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n,
                 sum.composite_ms / n, sum.copy_out_ms / n);
   std::fprintf(stderr,
-               "bench_render: %u particles %ux%u, %d filter passes: %.1f ms/frame wall (%.1f frames/s, best %.1f), GPU %.1f ms = "
+               "bench_render: %u particles %ux%u, %d filter passes: %.1f ms/frame wall (%.1f frames/s, median %.1f, best %.1f), GPU %.1f ms = "
                "scene %.1f + splat %.1f + filter %.1f + composite %.1f + read-back %.1f\n",
-               c.particles, c.width, c.height, c.filter_iterations, mean(wall), 1000.0 / mean(wall), best, mean(gpu),
+               c.particles, c.width, c.height, c.filter_iterations, mean(wall), 1000.0 / mean(wall), median, best, mean(gpu),
                sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n, sum.composite_ms / n, sum.copy_out_ms / n);
   return json;
 }

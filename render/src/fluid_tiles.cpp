@@ -16,6 +16,7 @@ void find_fluid_tiles(const std::vector<glm::vec3>& centres, float radius, const
   const float p00 = proj[0][0], p11 = proj[1][1];
   const int max_tx = int(nx) - 1, max_ty = int(ny) - 1;
   for (const glm::vec3& c : centres) {
+    if (!std::isfinite(c.x) || !std::isfinite(c.y) || !std::isfinite(c.z)) continue;  // a broken frame
     const glm::vec3 v = glm::vec3(view * glm::vec4(c, 1.0f));
     const float depth = -v.z;
     if (depth <= near_m) continue;  // the quad lies behind the near plane: clipped on the GPU
