@@ -50,9 +50,11 @@ FrameStatus ReplaySource::next_frame(Frame& frame) {
   frame.body_poses.assign(body_names_.size(), BodyPose{});
   for (size_t b = 0; b < body_names_.size(); ++b) {
     BodyPose pose;
-    // A body missing from the history stays at its scene pose (static bodies may not be logged).
-    if (bodies_ && bodies_->pose_at(body_names_[b], frame.sim_time_s, pose)) frame.body_poses[b] = pose;
-    else frame.body_poses[b] = description_.bodies[b].initial_pose;
+    // The body column holds the body's name (or its index in the scene). A body missing from the
+    // history stays at its scene pose (static bodies may not be logged).
+    const bool logged = bodies_ && (bodies_->pose_at(body_names_[b], frame.sim_time_s, pose) ||
+                                    bodies_->pose_at(std::to_string(b), frame.sim_time_s, pose));
+    frame.body_poses[b] = logged ? pose : description_.bodies[b].initial_pose;
   }
   ++next_;
   return FrameStatus::new_frame;

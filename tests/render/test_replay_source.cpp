@@ -78,6 +78,15 @@ TEST(ReplaySource, PlaysEveryFrameInOrderAndSplitsParticlesByKind) {
   EXPECT_EQ(source.next_frame(frame), FrameStatus::end_of_stream);
 }
 
+TEST(ReplaySource, BodiesMayBeNamedByTheirIndexInTheScene) {
+  RecordedRun run;
+  std::ofstream(run.dir / "bodies.csv") << "t,body,px,py,pz,qw,qx,qy,qz\n0.0,0,0.3,0,0.2,1,0,0,0\n";
+  ReplaySource source(run.dir, config::load_scene(run.dir / "scene.toml"));
+  Frame frame;
+  ASSERT_EQ(source.next_frame(frame), FrameStatus::new_frame);
+  EXPECT_NEAR(frame.body_poses.at(0).position_m.x, 0.3, 1e-6);
+}
+
 TEST(ReplaySource, AnIncompleteRunIsReportedByPath) {
   RecordedRun run;
   std::filesystem::remove(run.dir / "bodies.csv");
