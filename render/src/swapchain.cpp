@@ -26,6 +26,13 @@ Swapchain::Swapchain(VulkanContext& ctx, VkSurfaceKHR surface, GLFWwindow* windo
 }
 
 void Swapchain::create(GLFWwindow* window) {
+  // A minimised window has no pixels to present to: wait until it is restored (or closed).
+  int fb_width = 0, fb_height = 0;
+  glfwGetFramebufferSize(window, &fb_width, &fb_height);
+  while ((fb_width == 0 || fb_height == 0) && !glfwWindowShouldClose(window)) {
+    glfwWaitEvents();
+    glfwGetFramebufferSize(window, &fb_width, &fb_height);
+  }
   VkSurfaceCapabilitiesKHR caps;
   vk_check(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(ctx_.physical_device(), surface_, &caps),
            "vkGetPhysicalDeviceSurfaceCapabilitiesKHR");
@@ -33,9 +40,8 @@ void Swapchain::create(GLFWwindow* window) {
       VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
   if ((caps.supportedUsageFlags & usage) != usage)
     throw std::runtime_error("Vulkan: swapchain images cannot be blit targets, copy sources and colour attachments here");
-  int w = 0, h = 0;
-  glfwGetFramebufferSize(window, &w, &h);
-  extent_ = caps.currentExtent.width != UINT32_MAX ? caps.currentExtent : VkExtent2D{uint32_t(w), uint32_t(h)};
+  extent_ = caps.currentExtent.width != UINT32_MAX ? caps.currentExtent
+                                                   : VkExtent2D{uint32_t(fb_width), uint32_t(fb_height)};
   extent_.width = std::clamp(extent_.width, caps.minImageExtent.width, caps.maxImageExtent.width);
   extent_.height = std::clamp(extent_.height, caps.minImageExtent.height, caps.maxImageExtent.height);
   VkSwapchainCreateInfoKHR info{VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR};
