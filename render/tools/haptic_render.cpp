@@ -26,6 +26,7 @@ sources:
   --replay RUN_DIR       a recorded run of `haptic-sim --out RUN_DIR` (VTK frames + bodies.csv)
   --scene FILE           the run's scene file (default: RUN_DIR/scene.toml)
   --kind-field NAME      point array with the particle kind (default "kind"; 0 = fluid)
+  --look NAME            override the scene's fluid look: water, batter, honey or syrup
   --synthetic ball|pool  a fixed particle set (no simulator): a ball of fluid, or a pool
   --particles N          synthetic pool: number of particles (default 32768)
   (the live shared-memory channel of haptic-sim is added with rt_core's hapfluid_shm)
@@ -44,7 +45,7 @@ options:
 
 struct Args {
   bool headless = false, spheres = false, dump = false, mp4 = true, timings = false, validation = false;
-  std::string out, replay, scene, kind_field = "kind", synthetic, screenshot;
+  std::string out, replay, scene, kind_field = "kind", synthetic, screenshot, look;
   long frames = -1, particles = 32768;
   double duration = -1;
   RenderSettings settings;
@@ -78,6 +79,7 @@ Args parse(int argc, char** argv) {
     else if (o == "--replay") a.replay = value();
     else if (o == "--scene") a.scene = value();
     else if (o == "--kind-field") a.kind_field = value();
+    else if (o == "--look") a.look = value();
     else if (o == "--synthetic") a.synthetic = value();
     else if (o == "--particles") a.particles = long(number("--particles", value(), 1, 4e6));
     else if (o == "--frames") a.frames = long(number("--frames", value(), 1, 1e9));
@@ -100,9 +102,18 @@ Args parse(int argc, char** argv) {
   if (a.headless && a.out.empty()) bad("--headless needs --out DIR");
   if (!a.screenshot.empty() && (a.headless || a.frames < 0)) bad("--screenshot needs the windowed mode and --frames N");
   if (!a.replay.empty() && !a.synthetic.empty()) bad("give either --replay or --synthetic, not both");
+  if (!a.look.empty() && a.look != "water" && a.look != "batter" && a.look != "honey" && a.look != "syrup")
+    bad("--look " + a.look + ": must be water, batter, honey or syrup");
   if (!a.synthetic.empty() && a.synthetic != "ball" && a.synthetic != "pool")
     bad("--synthetic " + a.synthetic + ": must be \"ball\" or \"pool\"");
   return a;
+}
+
+config::FluidLook look_named(const std::string& name) {
+  if (name == "batter") return config::FluidLook::batter;
+  if (name == "honey") return config::FluidLook::honey;
+  if (name == "syrup") return config::FluidLook::syrup;
+  return config::FluidLook::water;
 }
 
 // The frame sources. The live one (the sim's particles channel, rt_core's hapfluid_shm) plugs in
@@ -113,7 +124,9 @@ std::unique_ptr<FrameSource> make_source(const Args& a) {
     const std::filesystem::path scene_file = a.scene.empty() ? std::filesystem::path(a.replay) / "scene.toml" : std::filesystem::path(a.scene);
     if (!std::filesystem::exists(scene_file))
       bad(scene_file.string() + ": scene file not found (give --scene FILE, the scene the run used)");
-    return std::make_unique<ReplaySource>(a.replay, config::load_scene(scene_file), a.kind_field);
+    config::Scene scene = config::load_scene(scene_file);
+    if (!a.look.empty()) scene.fluid.look = look_named(a.look);
+    return std::make_unique<ReplaySource>(a.replay, scene, a.kind_field);
   }
   if (!a.synthetic.empty()) {
     const bool ball = a.synthetic == "ball";
@@ -121,6 +134,7 @@ std::unique_ptr<FrameSource> make_source(const Args& a) {
     Frame frame;
     frame.fluid_m = ball ? fluid_ball({0.0f, 0.0f, 0.15f}, 0.12, radius) : fluid_pool(uint32_t(a.particles), radius);
     SceneDescription scene = ball ? synthetic_scene(radius) : synthetic_pool_scene(radius);
+    if (!a.look.empty()) scene.look = fluid_look(look_named(a.look));
     // A still scene repeats its frame; --frames/--duration bound it (default: one frame headless).
     const long frames = a.frames > 0 ? a.frames : (a.headless && a.duration < 0 ? 1 : 1000000000L);
     return std::make_unique<SyntheticSource>(scene, std::vector<Frame>{frame}, int(std::min(frames, 1000000000L)));

@@ -170,3 +170,29 @@ TEST_F(ValidatedRenderTest, RefusesImpossibleSettingsWithAClearMessage) {
     EXPECT_NE(std::string(e.what()).find("filter iterations must be 0..64"), std::string::npos) << e.what();
   }
 }
+
+TEST_F(ValidatedRenderTest, ExtinctionGivesEachFluidItsColour) {
+  // Eq. 15: through thick fluid the colour tends to F_c with wavelength-dependent extinction F_e.
+  // Water absorbs red most (blue-green), honey absorbs blue most (amber).
+  auto mean_colour_at_centre = [&](hapfluid::config::FluidLook look) {
+    SceneDescription scene = ball_scene();
+    scene.look = fluid_look(look);
+    FluidRenderer renderer(*ctx, scene, small_settings());
+    const OrbitCamera camera = close_camera(renderer);
+    renderer.set_camera(camera);
+    renderer.set_frame(ball_frame());
+    const Rgba8Image image = renderer.render_to_image();
+    const glm::ivec2 c = project(camera, ball_centre_m, image.width, image.height);
+    glm::vec3 sum(0.0f);
+    for (int dy = -10; dy <= 10; ++dy)
+      for (int dx = -10; dx <= 10; ++dx) {
+        const uint8_t* p = image.pixel(uint32_t(c.x + dx), uint32_t(c.y + dy));
+        sum += glm::vec3(p[0], p[1], p[2]);
+      }
+    return sum / 441.0f;
+  };
+  const glm::vec3 water = mean_colour_at_centre(hapfluid::config::FluidLook::water);
+  const glm::vec3 honey = mean_colour_at_centre(hapfluid::config::FluidLook::honey);
+  EXPECT_GT(water.b, water.r + 20.0f) << "water " << water.r << " " << water.g << " " << water.b;
+  EXPECT_GT(honey.r, honey.b + 40.0f) << "honey " << honey.r << " " << honey.g << " " << honey.b;
+}

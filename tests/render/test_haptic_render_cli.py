@@ -75,6 +75,7 @@ def test_spheres_debug_mode_runs_clean(binary, tmp_path):
     (["--frames", "-3"], "--frames -3: must be a number"),
     (["--headless"], "--headless needs --out DIR"),
     (["--bogus"], "unknown option --bogus"),
+    (["--look", "tar"], "--look tar: must be water, batter, honey or syrup"),
 ])
 def test_bad_command_lines_are_refused_with_the_reason(binary, args, message):
     r = run(binary, *args)
