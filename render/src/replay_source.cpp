@@ -1,6 +1,8 @@
 #include "hapfluid/render/replay_source.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <stdexcept>
 
@@ -8,6 +10,20 @@
 #include "hapfluid/render/vtk_reader.hpp"
 
 namespace hapfluid::render {
+namespace {
+
+// haptic-sim writes "hapfluid <scene> t=<seconds> s" as the VTK title.
+std::optional<double> time_from_title(const std::string& title) {
+  const size_t at = title.find(" t=");
+  if (at == std::string::npos) return std::nullopt;
+  const char* start = title.c_str() + at + 3;
+  char* end = nullptr;
+  const double t = std::strtod(start, &end);
+  if (end == start || !std::isfinite(t)) return std::nullopt;
+  return t;
+}
+
+}  // namespace
 
 ReplaySource::ReplaySource(const std::filesystem::path& run_dir, const config::Scene& scene, std::string kind_field)
     : description_(describe_scene(scene)), kind_field_(std::move(kind_field)), frame_rate_hz_(scene.time.frame_rate_hz) {
@@ -33,7 +49,7 @@ FrameStatus ReplaySource::next_frame(Frame& frame) {
   const auto& file = files_[next_];
   VtkPoints vtk = read_vtk_points(file);
   frame.index = next_;
-  frame.sim_time_s = vtk.time_s ? *vtk.time_s : double(next_) / frame_rate_hz_;
+  frame.sim_time_s = vtk.time_s ? *vtk.time_s : time_from_title(vtk.title).value_or(double(next_) / frame_rate_hz_);
   frame.fluid_m.clear();
   frame.solid_m.clear();
   auto kinds = vtk.point_scalars.find(kind_field_);

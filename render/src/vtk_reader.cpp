@@ -28,7 +28,7 @@ class Parser {
 
   VtkPoints parse() {
     expect_prefix(line(), "# vtk DataFile Version", "the first line must be \"# vtk DataFile Version x.x\"");
-    line();  // title
+    const std::string title = line();
     const std::string encoding = lower(trimmed(line()));
     if (encoding == "binary") binary_ = true;
     else if (encoding != "ascii") fail("the third line must be ASCII or BINARY, not \"" + encoding + "\"");
@@ -40,6 +40,7 @@ class Parser {
       fail("DATASET " + dataset[1] + " is not supported (POLYDATA or UNSTRUCTURED_GRID)");
 
     VtkPoints out;
+    out.title = trimmed(title);
     bool have_points = false;
     size_t section_count = 0;
     bool in_point_data = false;

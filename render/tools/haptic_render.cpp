@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -116,14 +118,31 @@ config::FluidLook look_named(const std::string& name) {
   return config::FluidLook::water;
 }
 
+// The scene a recorded run used: RUN/scene.toml, else the "scene" haptic-sim wrote into
+// RUN/stats.json (relative to where haptic-sim ran, or to the run folder).
+std::filesystem::path scene_of_run(const std::filesystem::path& run) {
+  if (std::filesystem::exists(run / "scene.toml")) return run / "scene.toml";
+  std::ifstream stats(run / "stats.json");
+  const std::string text((std::istreambuf_iterator<char>(stats)), std::istreambuf_iterator<char>());
+  const std::string key = "\"scene\": \"";
+  const size_t at = text.find(key);
+  if (at == std::string::npos) return {};
+  const size_t end = text.find('"', at + key.size());
+  if (end == std::string::npos) return {};
+  const std::filesystem::path scene = text.substr(at + key.size(), end - at - key.size());
+  if (scene.is_absolute() || std::filesystem::exists(scene)) return scene;
+  return run / scene;
+}
+
 // The frame sources. The live one (the sim's particles channel, rt_core's hapfluid_shm) plugs in
 // here as another FrameSource whose next_frame() copies the newest complete frame without
 // blocking the writer and returns FrameStatus::unchanged when there is nothing newer.
 std::unique_ptr<FrameSource> make_source(const Args& a) {
   if (!a.replay.empty()) {
-    const std::filesystem::path scene_file = a.scene.empty() ? std::filesystem::path(a.replay) / "scene.toml" : std::filesystem::path(a.scene);
-    if (!std::filesystem::exists(scene_file))
-      bad(scene_file.string() + ": scene file not found (give --scene FILE, the scene the run used)");
+    const std::filesystem::path scene_file = a.scene.empty() ? scene_of_run(a.replay) : std::filesystem::path(a.scene);
+    if (scene_file.empty() || !std::filesystem::exists(scene_file))
+      bad("cannot find the scene of the run " + a.replay + " (looked for --scene, " + a.replay + "/scene.toml and the "
+          "\"scene\" of " + a.replay + "/stats.json): give --scene FILE, the scene the run used");
     config::Scene scene = config::load_scene(scene_file);
     if (!a.look.empty()) scene.fluid.look = look_named(a.look);
     return std::make_unique<ReplaySource>(a.replay, scene, a.kind_field);

@@ -17,27 +17,43 @@ def run(binary, *args, timeout=60):
                           timeout=timeout)
 
 
-def write_recorded_run(run_dir: pathlib.Path, frames: int) -> None:
-    """A run as `haptic-sim --out DIR` leaves it: binary VTK frames, bodies.csv, the scene."""
+def write_recorded_run(run_dir: pathlib.Path, frames: int, scene_in_stats: bool = False) -> None:
+    """A run laid out exactly as `haptic-sim --out DIR` writes it (sim_gpu/src/outputs.cpp): binary
+    POLYDATA frames titled "hapfluid <scene> t=<s> s" with VERTICES, a velocity vector and the
+    density/pressure/kind/body/id scalars (kind 0 fluid, 1 wall, 2 body), bodies.csv with poses,
+    twists and wrenches, and stats.json naming the scene file."""
     (run_dir / "particles").mkdir(parents=True)
     (run_dir / "cube.obj").write_text(
         "".join(f"v {x} {y} {z}\n" for z in (-0.05, 0.05) for y in (-0.05, 0.05) for x in (-0.05, 0.05))
         + "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n")
-    (run_dir / "scene.toml").write_text(
+    scene = (run_dir / "cli_replay.toml") if scene_in_stats else (run_dir / "scene.toml")
+    scene.write_text(
         'name = "cli_replay"\n[domain]\nmin_m = [-0.3, -0.3, 0.0]\nmax_m = [0.3, 0.3, 0.5]\n'
         '[fluid]\nparticle_spacing_m = 0.02\nspeed_of_sound_m_s = 20.0\nlook = "syrup"\n'
         '[time]\nframe_rate_hz = 30.0\n'
         '[[bodies]]\nname = "spoon"\nmesh = "cube.obj"\nposition_m = [0.0, 0.0, 0.25]\ndensity_kg_m3 = 500.0\n')
-    points = [(x * 0.02, y * 0.02, 0.01 + z * 0.02) for x in range(-4, 5) for y in range(-4, 5) for z in range(3)]
+    if scene_in_stats:
+        (run_dir / "stats.json").write_text('{\n  "scene": "%s",\n  "frames_exported": %d\n}\n' % (scene, frames))
+    fluid = [(x * 0.02, y * 0.02, 0.01 + z * 0.02) for x in range(-4, 5) for y in range(-4, 5) for z in range(3)]
+    wall = [(x * 0.02, y * 0.02, -0.01) for x in range(-6, 7) for y in range(-6, 7)]
     for f in range(frames):
-        body = b"".join(struct.pack(">fff", x, y, z + 0.005 * f) for x, y, z in points)
-        kinds = b"".join(struct.pack(">i", 0) for _ in points)
-        header = (f"# vtk DataFile Version 3.0\nframe {f}\nBINARY\nDATASET POLYDATA\n"
-                  f"POINTS {len(points)} float\n").encode()
-        (run_dir / "particles" / f"frame_{f:06d}.vtk").write_bytes(
-            header + body + f"\nPOINT_DATA {len(points)}\nSCALARS kind int 1\nLOOKUP_TABLE default\n".encode() + kinds)
-    rows = [f"{f / 30.0},spoon,{0.01 * f},0,0.25,1,0,0,0,0,0,0" for f in range(frames)]
-    (run_dir / "bodies.csv").write_text("t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz\n" + "\n".join(rows) + "\n")
+        points = [(x, y, z + 0.005 * f) for x, y, z in fluid] + wall
+        kinds = [0] * len(fluid) + [1] * len(wall)
+        n = len(points)
+        be = lambda fmt, values: b"".join(struct.pack(">" + fmt, *v) if isinstance(v, tuple) else struct.pack(">" + fmt, v)
+                                          for v in values)
+        data = (f"# vtk DataFile Version 3.0\nhapfluid cli_replay t={f / 30.0:.6f} s\nBINARY\nDATASET POLYDATA\n"
+                f"POINTS {n} float\n").encode() + be("fff", points)
+        data += f"\nVERTICES {n} {2 * n}\n".encode() + be("ii", [(1, i) for i in range(n)])
+        data += f"\nPOINT_DATA {n}\nVECTORS velocity float\n".encode() + be("fff", [(0.0, 0.0, 0.0)] * n)
+        for name, fmt, values in (("density", "f", [1000.0] * n), ("pressure", "f", [0.0] * n),
+                                  ("kind", "i", kinds), ("body", "i", [-1] * n), ("id", "i", list(range(n)))):
+            data += f"\nSCALARS {name} {'float' if fmt == 'f' else 'int'} 1\nLOOKUP_TABLE default\n".encode()
+            data += be(fmt, values)
+        (run_dir / "particles" / f"frame_{f:06d}.vtk").write_bytes(data + b"\n")
+    rows = [f"{f / 30.0},spoon,{0.01 * f},0,0.25,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0" for f in range(frames)]
+    (run_dir / "bodies.csv").write_text("t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n"
+                                        + "\n".join(rows) + "\n")
 
 
 def test_headless_ball_writes_the_frame_and_the_intermediate_buffers(binary, tmp_path):
@@ -62,6 +78,14 @@ def test_replay_renders_one_png_per_recorded_frame(binary, tmp_path):
         assert (out / "frames.mp4").is_file()
     else:
         assert "ffmpeg not found: skipping the MP4" in r.stderr
+
+
+def test_replay_finds_the_scene_through_stats_json(binary, tmp_path):
+    run_dir = tmp_path / "run"
+    write_recorded_run(run_dir, frames=2, scene_in_stats=True)
+    r = run(binary, "--headless", "--replay", run_dir, "--out", tmp_path / "frames", *SMALL)
+    assert r.returncode == 0, r.stderr
+    assert len(list((tmp_path / "frames").glob("frame_*.png"))) == 2
 
 
 def test_spheres_debug_mode_runs_clean(binary, tmp_path):

@@ -87,6 +87,20 @@ TEST(ReplaySource, BodiesMayBeNamedByTheirIndexInTheScene) {
   EXPECT_NEAR(frame.body_poses.at(0).position_m.x, 0.3, 1e-6);
 }
 
+TEST(ReplaySource, TakesTheFrameTimeFromHapticSimsVtkTitle) {
+  // haptic-sim titles its frames "hapfluid <scene> t=<s> s"; that time places the bodies even when
+  // frames were skipped or exported at another rate than the scene's frame_rate_hz.
+  RecordedRun run;
+  std::ofstream(run.dir / "particles" / "frame_000000.vtk")
+      << "# vtk DataFile Version 3.0\nhapfluid replay_test t=0.150000 s\nASCII\nDATASET POLYDATA\n"
+      << "POINTS 1 float\n0 0 0\n";
+  ReplaySource source(run.dir, config::load_scene(run.dir / "scene.toml"));
+  Frame frame;
+  ASSERT_EQ(source.next_frame(frame), FrameStatus::new_frame);
+  EXPECT_DOUBLE_EQ(frame.sim_time_s, 0.15);
+  EXPECT_NEAR(frame.body_poses.at(0).position_m.x, 0.075, 1e-6);  // 3/4 of the way to 0.1 m at 0.2 s
+}
+
 TEST(ReplaySource, AnIncompleteRunIsReportedByPath) {
   RecordedRun run;
   std::filesystem::remove(run.dir / "bodies.csv");

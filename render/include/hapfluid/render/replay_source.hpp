@@ -3,7 +3,8 @@
 //
 // Particle kinds come from a point scalar (default name "kind"): 0 = fluid, 1 = boundary,
 // 2 + k = particle of body k. Without that array every point is drawn as fluid (with a warning).
-// A frame's time is its TIME field when present, else index / scene frame rate. bodies.csv names
+// A frame's time is its TIME field, else the "t=<s>" haptic-sim puts in the VTK title, else
+// index / scene frame rate. bodies.csv names
 // a body by its scene name or by its index in the scene's [[bodies]] list.
 #pragma once
 

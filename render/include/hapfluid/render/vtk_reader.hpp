@@ -18,6 +18,7 @@ struct VtkPoints {
   std::vector<glm::dvec3> points_m;
   std::map<std::string, std::vector<double>> point_scalars;  // one value per point
   std::optional<double> time_s;                              // a TIME field array, when present
+  std::string title;                                         // the file's second line
 };
 
 // Throws std::runtime_error("<file>: <where>: <what was wrong>").
