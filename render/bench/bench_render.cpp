@@ -45,7 +45,7 @@ std::string run_case(VulkanContext& ctx, const Case& c, int frames) {
     const PassTimes t = renderer.pass_times();
     gpu.push_back(t.total_ms);
     sum.scene_ms += t.scene_ms, sum.splat_ms += t.splat_ms, sum.filter_ms += t.filter_ms;
-    sum.composite_ms += t.composite_ms, sum.copy_out_ms += t.copy_out_ms;
+    sum.normals_ms += t.normals_ms, sum.composite_ms += t.composite_ms, sum.copy_out_ms += t.copy_out_ms;
   }
   auto mean = [](const std::vector<double>& v) {
     double s = 0;
@@ -66,15 +66,16 @@ std::string run_case(VulkanContext& ctx, const Case& c, int frames) {
                 "\"metrics\": {\"ms_per_frame\": %.2f, \"frames_per_s\": %.2f, \"p95_ms_per_frame\": %.2f, "
                 "\"min_ms_per_frame\": %.2f, \"median_ms_per_frame\": %.2f, "
                 "\"gpu_ms_per_frame\": %.2f, \"scene_ms\": %.2f, \"splat_ms\": %.2f, \"filter_ms\": %.2f, "
-                "\"composite_ms\": %.2f, \"readback_ms\": %.2f}}",
+                "\"normals_ms\": %.2f, \"composite_ms\": %.2f, \"readback_ms\": %.2f}}",
                 c.particles, c.width, c.height, c.filter_iterations, ctx.properties().deviceName, mean(wall),
                 1000.0 / mean(wall), p95, best, median, mean(gpu), sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n,
-                sum.composite_ms / n, sum.copy_out_ms / n);
+                sum.normals_ms / n, sum.composite_ms / n, sum.copy_out_ms / n);
   std::fprintf(stderr,
                "bench_render: %u particles %ux%u, %d filter passes: %.1f ms/frame wall (%.1f frames/s, median %.1f, best %.1f), GPU %.1f ms = "
-               "scene %.1f + splat %.1f + filter %.1f + composite %.1f + read-back %.1f\n",
+               "scene %.1f + splat %.1f + filter %.1f + normals %.1f + composite %.1f + read-back %.1f\n",
                c.particles, c.width, c.height, c.filter_iterations, mean(wall), 1000.0 / mean(wall), median, best, mean(gpu),
-               sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n, sum.composite_ms / n, sum.copy_out_ms / n);
+               sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n, sum.normals_ms / n, sum.composite_ms / n,
+               sum.copy_out_ms / n);
   return json;
 }
 

@@ -3,8 +3,7 @@
 // §5.2: the single full-resolution compositing pass, equation 15:
 //   col(p) = lerp(F_c, S_c(p + beta T(p) n.xy), exp(-T(p) F_e)) + k_s (n . h)^alpha
 // with T(p) = min(back, S_d) - min(front, S_d); where T = 0 the scene colour is copied.
-// The normal n comes from finite differences of the smoothed front depth ([21]: the smaller of the
-// one-sided differences, so silhouettes do not bend normals).
+// The normal n comes from surface_normals.comp (finite differences of the smoothed front depth).
 #include "common.glsl"
 
 // One workgroup per 16 x 16 pixel tile that may hold fluid (the 8 x 8 half-resolution tiles of
@@ -17,6 +16,7 @@ layout(set = 0, binding = 3) uniform sampler2D smoothed_front; // half resolutio
 layout(set = 0, binding = 4) uniform sampler2D splat_depth;    // half resolution: (front, -back)
 layout(set = 0, binding = 5) uniform writeonly image2D out_colour;
 layout(set = 0, binding = 6, std430) readonly buffer FluidTiles { uint fluid_tiles[]; };
+layout(set = 0, binding = 7) uniform sampler2D surface_normals; // half resolution, view space
 
 layout(push_constant) uniform Push {
   int mode;                // 0: eq. 15; 1: normals as colour; 2: thickness as grey
@@ -25,24 +25,7 @@ layout(push_constant) uniform Push {
 
 ivec2 half_size() { return ivec2(frame.half_viewport.xy); }
 
-float front_at(ivec2 texel) {
-  return texelFetch(smoothed_front, clamp(texel, ivec2(0), half_size() - 1), 0).r;
-}
-
 bool is_fluid(float depth) { return depth <= frame.splat.w; }
-
-// Finite-difference tangent along `step`, choosing the one-sided difference with the smaller
-// depth change and ignoring neighbours without fluid.
-vec3 tangent(ivec2 texel, vec3 centre, ivec2 step) {
-  float zp = front_at(texel + step), zm = front_at(texel - step);
-  vec3 forward = view_position(vec2(texel + step), frame.half_viewport.zw, zp) - centre;
-  vec3 backward = centre - view_position(vec2(texel - step), frame.half_viewport.zw, zm);
-  bool use_forward = is_fluid(zp) && (!is_fluid(zm) || abs(forward.z) <= abs(backward.z));
-  if (use_forward) return forward;
-  if (is_fluid(zm)) return backward;
-  // Isolated texel: a screen-aligned tangent, so the normal faces the camera.
-  return view_position(vec2(texel + step), frame.half_viewport.zw, centre.z * -1.0) - centre;
-}
 
 void main() {
   uint tile = fluid_tiles[gl_WorkGroupID.x];
@@ -64,9 +47,7 @@ void main() {
     return;
   }
 
-  vec3 centre = view_position(vec2(texel), frame.half_viewport.zw, front);
-  vec3 n = normalize(cross(tangent(texel, centre, ivec2(1, 0)), tangent(texel, centre, ivec2(0, 1))));
-  if (dot(n, -centre) < 0.0) n = -n;
+  vec3 n = texelFetch(surface_normals, texel, 0).xyz;
 
   vec4 result;
   if (push.mode == 1) {

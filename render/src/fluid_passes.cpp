@@ -161,9 +161,22 @@ const GpuImage& FluidRenderer::Impl::record_filter(VkCommandBuffer cmd) {
   return *destination;
 }
 
+const GpuImage& FluidRenderer::Impl::final_smoothed() const {
+  const int iterations = settings.filter_iterations;
+  return iterations <= 0 ? targets.splat : iterations % 2 == 1 ? targets.smoothed_a : targets.smoothed_b;
+}
+
+void FluidRenderer::Impl::record_normals(VkCommandBuffer cmd) {
+  transition(cmd, targets.normals, state::undefined, state::compute_write);
+  vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, normals_pipeline);
+  vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, filter_layout, 0, 1, &normals_set, 0, nullptr);
+  if (!tiles.empty()) vkCmdDispatch(cmd, uint32_t(tiles.size()), 1, 1);
+  transition(cmd, targets.normals, state::compute_write, state::compute_read);
+}
+
 void FluidRenderer::Impl::record_composite(VkCommandBuffer cmd, CompositeMode mode) {
   const int iterations = settings.filter_iterations;
-  const int set = iterations <= 0 ? 0 : (iterations % 2 == 1 ? 1 : 2);
+  const int set = iterations <= 0 ? 0 : (iterations % 2 == 1 ? 1 : 2);  // the set reading final_smoothed()
   // Pixels outside the fluid tiles are the scene (§5.2: T = 0 copies the scene colour).
   transition(cmd, targets.scene_colour, state::compute_read, state::transfer_src);
   transition(cmd, targets.output, state::undefined, state::transfer_dst);
@@ -192,6 +205,8 @@ void FluidRenderer::Impl::record(VkCommandBuffer c, const OrbitCamera& camera, C
   record_splat(c);
   timer.stamp(c);
   record_filter(c);
+  timer.stamp(c);
+  record_normals(c);
   timer.stamp(c);
   record_composite(c, mode);
   timer.stamp(c);

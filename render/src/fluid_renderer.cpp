@@ -73,11 +73,7 @@ Rgba8Image FluidRenderer::render_to_image(CompositeMode mode) {
 
 FloatImage FluidRenderer::read_buffer(FluidBuffer which) {
   Impl& m = *impl_;
-  const int iterations = m.settings.filter_iterations;
-  const GpuImage& image = which != FluidBuffer::smoothed_front_depth ? m.targets.splat
-                          : iterations <= 0                          ? m.targets.splat
-                          : iterations % 2 == 1                      ? m.targets.smoothed_a
-                                                                     : m.targets.smoothed_b;
+  const GpuImage& image = which == FluidBuffer::smoothed_front_depth ? m.final_smoothed() : m.targets.splat;
   const bool two_channels = image.format() == m.formats.splat;
   const size_t texel_bytes = two_channels ? 8 : 4;
   if (image.format() == VK_FORMAT_R16G16_SFLOAT || image.format() == VK_FORMAT_R16_SFLOAT)
@@ -106,13 +102,14 @@ PassTimes FluidRenderer::pass_times() const {
   std::array<double, GpuTimer::capacity - 1> ms{};
   uint32_t n = 0;
   PassTimes t;
-  if (!impl_->timer.intervals_ms(ms, n) || n < 4) return t;
+  if (!impl_->timer.intervals_ms(ms, n) || n < 5) return t;
   t.valid = true;
   t.scene_ms = ms[0];
   t.splat_ms = ms[1];
   t.filter_ms = ms[2];
-  t.composite_ms = ms[3];
-  t.copy_out_ms = n > 4 ? ms[4] : 0.0;
+  t.normals_ms = ms[3];
+  t.composite_ms = ms[4];
+  t.copy_out_ms = n > 5 ? ms[5] : 0.0;
   for (uint32_t i = 0; i < n; ++i) t.total_ms += ms[i];
   return t;
 }

@@ -55,9 +55,10 @@ struct FluidRenderer::Impl {
   VkPipelineLayout scene_layout = VK_NULL_HANDLE, spheres_layout = VK_NULL_HANDLE, splat_layout = VK_NULL_HANDLE,
                    filter_layout = VK_NULL_HANDLE, composite_layout = VK_NULL_HANDLE;
   VkPipeline scene_pipeline = VK_NULL_HANDLE, spheres_pipeline = VK_NULL_HANDLE, splat_pipeline = VK_NULL_HANDLE,
-             filter_pipeline = VK_NULL_HANDLE, composite_pipeline = VK_NULL_HANDLE;
+             filter_pipeline = VK_NULL_HANDLE, normals_pipeline = VK_NULL_HANDLE, composite_pipeline = VK_NULL_HANDLE;
   VkDescriptorSet graphics_set = VK_NULL_HANDLE;
   VkDescriptorSet filter_sets[3] = {};     // splat->a, a->b, b->a
+  VkDescriptorSet normals_set = VK_NULL_HANDLE;  // final smoothed depth -> normals
   VkDescriptorSet composite_sets[3] = {};  // smoothed = splat (0 iterations), a, b
   VkCommandBuffer cmd = VK_NULL_HANDLE;
   VkFence fence = VK_NULL_HANDLE;
@@ -73,7 +74,9 @@ struct FluidRenderer::Impl {
   void record_scene(VkCommandBuffer cmd);
   void record_splat(VkCommandBuffer cmd);
   const GpuImage& record_filter(VkCommandBuffer cmd);
+  void record_normals(VkCommandBuffer cmd);
   void record_composite(VkCommandBuffer cmd, CompositeMode mode);
+  const GpuImage& final_smoothed() const;
   void ensure_capacity(HostBuffer& buffer, size_t bytes, VkBufferUsageFlags usage);
   void ensure_fluid_capacity(size_t particles);
   void write_particle_binding();

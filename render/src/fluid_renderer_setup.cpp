@@ -10,6 +10,7 @@
 #include "scene_frag.spv.h"
 #include "scene_vert.spv.h"
 #include "spheres_frag.spv.h"
+#include "surface_normals_comp.spv.h"
 #include "spheres_vert.spv.h"
 #include "splat_frag.spv.h"
 #include "splat_vert.spv.h"
@@ -26,7 +27,8 @@ VkDescriptorSetLayoutBinding binding(uint32_t index, VkDescriptorType type, VkSh
 FluidRenderer::Impl::~Impl() {
   VkDevice d = ctx.device();
   vkDeviceWaitIdle(d);
-  for (VkPipeline p : {scene_pipeline, spheres_pipeline, splat_pipeline, filter_pipeline, composite_pipeline})
+  for (VkPipeline p : {scene_pipeline, spheres_pipeline, splat_pipeline, filter_pipeline, normals_pipeline,
+                       composite_pipeline})
     vkDestroyPipeline(d, p, nullptr);
   for (VkPipelineLayout l : {scene_layout, spheres_layout, splat_layout, filter_layout, composite_layout})
     vkDestroyPipelineLayout(d, l, nullptr);
@@ -108,14 +110,15 @@ void FluidRenderer::Impl::create_descriptors() {
                                              binding(3, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
                                              binding(4, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs),
                                              binding(5, VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, cs),
-                                             binding(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs)});
+                                             binding(6, VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, cs),
+                                             binding(7, VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, cs)});
 
-  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 7},
-                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 15},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 6},
-                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7}};
+  VkDescriptorPoolSize sizes[] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 8},
+                                  {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 19},
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, 7},
+                                  {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8}};
   VkDescriptorPoolCreateInfo p{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
-  p.maxSets = 7;
+  p.maxSets = 8;
   p.poolSizeCount = 4;
   p.pPoolSizes = sizes;
   vk_check(vkCreateDescriptorPool(d, &p, nullptr, &pool), "vkCreateDescriptorPool");
@@ -176,6 +179,11 @@ void FluidRenderer::Impl::create_descriptors() {
     write_image(filter_sets[i], 2, *filter_io[i][1], true);
     write_tiles(filter_sets[i], 3);
   }
+  normals_set = allocate(filter_set_layout);
+  write_ubo(normals_set);
+  write_image(normals_set, 1, final_smoothed(), false);
+  write_image(normals_set, 2, targets.normals, true);
+  write_tiles(normals_set, 3);
   const GpuImage* smoothed[3] = {&targets.splat, &targets.smoothed_a, &targets.smoothed_b};
   for (int i = 0; i < 3; ++i) {
     composite_sets[i] = allocate(composite_set_layout);
@@ -186,6 +194,7 @@ void FluidRenderer::Impl::create_descriptors() {
     write_image(composite_sets[i], 4, targets.splat, false);
     write_image(composite_sets[i], 5, targets.output, true);
     write_tiles(composite_sets[i], 6);
+    write_image(composite_sets[i], 7, targets.normals, false);
   }
 }
 
@@ -229,6 +238,8 @@ void FluidRenderer::Impl::create_pipelines() {
   splat_pipeline = make_graphics_pipeline(d, splat_desc);
 
   filter_pipeline = make_compute_pipeline(d, HAPFLUID_SHADER(bilateral_filter_comp), filter_layout);
+  // Same bindings as the filter: UBO, source depth, target image, tiles.
+  normals_pipeline = make_compute_pipeline(d, HAPFLUID_SHADER(surface_normals_comp), filter_layout);
   composite_pipeline = make_compute_pipeline(d, HAPFLUID_SHADER(composite_comp), composite_layout);
 }
 

@@ -68,9 +68,9 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
     if (options.print_timings && t.valid)
       std::fprintf(stderr,
                    "haptic-render: frame %llu: %zu fluid particles, %.1f ms (scene %.1f, splat %.1f, filter %.1f, "
-                   "composite %.1f, read-back %.1f)\n",
+                   "normals %.1f, composite %.1f, read-back %.1f)\n",
                    static_cast<unsigned long long>(frame.index), frame.fluid_m.size(), t.total_ms, t.scene_ms,
-                   t.splat_ms, t.filter_ms, t.composite_ms, t.copy_out_ms);
+                   t.splat_ms, t.filter_ms, t.normals_ms, t.composite_ms, t.copy_out_ms);
     write_png(options.out_dir / numbered("frame_", uint64_t(summary.frames), ".png"), image);
     if (options.dump_buffers) dump_buffers(renderer, buffers_dir, uint64_t(summary.frames));
     ++summary.frames;

@@ -12,6 +12,8 @@ const char* name(VkFormat f) {
     case VK_FORMAT_R16G16_SFLOAT: return "RG16F";
     case VK_FORMAT_R32_SFLOAT: return "R32F";
     case VK_FORMAT_R16_SFLOAT: return "R16F";
+    case VK_FORMAT_R16G16B16A16_SFLOAT: return "RGBA16F";
+    case VK_FORMAT_R32G32B32A32_SFLOAT: return "RGBA32F";
     case VK_FORMAT_R8G8B8A8_UNORM: return "RGBA8";
     case VK_FORMAT_D32_SFLOAT: return "D32F";
     default: return "?";
@@ -40,6 +42,8 @@ TargetFormats choose_formats(const VulkanContext& ctx) {
                        sampled_linear | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT, "splat depth target");
   t.smoothed = first_with(ctx, {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R16_SFLOAT},
                           sampled_linear | VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT, "smoothed depth");
+  t.normals = first_with(ctx, {VK_FORMAT_R16G16B16A16_SFLOAT, VK_FORMAT_R32G32B32A32_SFLOAT},
+                         VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT, "normals");
   t.scene_colour = first_with(ctx, {VK_FORMAT_R8G8B8A8_UNORM}, sampled_linear | VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT,
                               "scene colour");
   t.scene_depth = first_with(ctx, {VK_FORMAT_R32_SFLOAT, VK_FORMAT_R16_SFLOAT},
@@ -66,6 +70,7 @@ RenderTargets::RenderTargets(VulkanContext& ctx, const TargetFormats& f, VkExten
   const VkImageUsageFlags cleared = VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | sampled;
   smoothed_a = GpuImage(ctx, half, f.smoothed, cleared);
   smoothed_b = GpuImage(ctx, half, f.smoothed, cleared);
+  normals = GpuImage(ctx, half, f.normals, VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_SAMPLED_BIT);
   output = GpuImage(ctx, full, f.output,
                     VK_IMAGE_USAGE_STORAGE_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
 }

@@ -14,6 +14,7 @@ struct TargetFormats {
   VkFormat zbuffer = VK_FORMAT_D32_SFLOAT;
   VkFormat splat = VK_FORMAT_R32G32_SFLOAT;     // (front, -back), MIN-blended, bilinear-sampled
   VkFormat smoothed = VK_FORMAT_R32_SFLOAT;     // filter ping-pong: storage + bilinear-sampled
+  VkFormat normals = VK_FORMAT_R16G16B16A16_SFLOAT;  // view-space normals: storage + sampled
   VkFormat output = VK_FORMAT_R8G8B8A8_UNORM;   // composite result: storage + transfer source
   std::string summary;
 };
@@ -25,7 +26,7 @@ struct RenderTargets {
   RenderTargets(VulkanContext& ctx, const TargetFormats& formats, VkExtent2D full, VkExtent2D half);
   VkExtent2D full, half;
   GpuImage scene_colour, scene_depth, zbuffer;  // full resolution
-  GpuImage splat, smoothed_a, smoothed_b;       // half resolution
+  GpuImage splat, smoothed_a, smoothed_b, normals;  // half resolution
   GpuImage output;                              // full resolution
 };
 

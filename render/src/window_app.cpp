@@ -56,12 +56,12 @@ struct GlfwSession {
 
 void draw_stats(TextOverlay& overlay, const Frame& frame, double render_fps, double frames_per_s, const PassTimes& t) {
   overlay.clear();
-  overlay.rectangle({8, 8}, {430, 150 + 30.0f * float(frame.device_forces.size())}, {0.0f, 0.0f, 0.0f, 0.55f});
+  overlay.rectangle({8, 8}, {520, 150 + 30.0f * float(frame.device_forces.size())}, {0.0f, 0.0f, 0.0f, 0.55f});
   char line[160];
   std::snprintf(line, sizeof line, "render %.1f frames/s   GPU %.1f ms", render_fps, t.total_ms);
   overlay.text({18, 18}, line);
-  std::snprintf(line, sizeof line, "  scene %.1f  splat %.1f  filter %.1f  composite %.1f ms", t.scene_ms, t.splat_ms,
-                t.filter_ms, t.composite_ms);
+  std::snprintf(line, sizeof line, "  scene %.1f  splat %.1f  filter %.1f  normals %.1f  composite %.1f ms",
+                t.scene_ms, t.splat_ms, t.filter_ms, t.normals_ms, t.composite_ms);
   overlay.text({18, 44}, line, {0.8f, 0.8f, 0.8f, 1.0f});
   if (frame.sim_steps_per_s > 0)
     std::snprintf(line, sizeof line, "sim %.0f steps/s   t = %.2f s", frame.sim_steps_per_s, frame.sim_time_s);

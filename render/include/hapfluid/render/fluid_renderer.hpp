@@ -3,7 +3,8 @@
 //   2. splat      (half res)  fluid particles as sphere splats, radius 1.2 x particle radius ->
 //                             front depth and back depth in one pass (§5.1)
 //   3. filter     (half res)  the fast 5-sample bilateral filter of fig. 5, N iterations (§5.1)
-//   4. composite  (full res)  equation 15 over the scene in one compute pass (§5.2)
+//   4. normals    (half res)  finite differences of the smoothed depth (§5.2)
+//   5. composite  (full res)  equation 15 over the scene in one compute pass (§5.2)
 // Headless and windowed modes share it: the result is an offscreen image that is either read back
 // or blitted to a swapchain image.
 #pragma once
@@ -39,7 +40,7 @@ enum class FluidBuffer { raw_front_depth, back_depth, smoothed_front_depth };
 // GPU time of each pass of the last completed frame (timestamp queries), in milliseconds.
 struct PassTimes {
   bool valid = false;
-  double scene_ms = 0, splat_ms = 0, filter_ms = 0, composite_ms = 0, copy_out_ms = 0, total_ms = 0;
+  double scene_ms = 0, splat_ms = 0, filter_ms = 0, normals_ms = 0, composite_ms = 0, copy_out_ms = 0, total_ms = 0;
 };
 
 class FluidRenderer {
