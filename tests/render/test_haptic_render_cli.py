@@ -126,14 +126,14 @@ def test_window_presents_frames_under_xvfb(binary, tmp_path):
     import matplotlib.image
     shot = tmp_path / "window.png"
     r = subprocess.run(["xvfb-run", "-a", str(binary("haptic-render")), "--synthetic", "ball", "--frames", "3",
-                        "--width", "480", "--height", "360", "--validation", "--screenshot", str(shot)],
+                        "--width", "640", "--height", "480", "--validation", "--screenshot", str(shot)],
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     assert "presented 3 frames" in r.stderr
     image = matplotlib.image.imread(str(shot))
-    assert image.shape[:2] == (360, 480)
+    assert image.shape[:2] == (480, 640)
     panel = image[20:60, 20:200, :3].mean()   # the translucent statistics panel with its text
-    sky = image[20:60, 440:478, :3].mean()    # plain background beside it
+    sky = image[20:60, 560:630, :3].mean()    # plain background beside it
     assert panel < sky - 0.1, "the statistics overlay must darken its corner"
-    centre = image[170:190, 230:250, :3].mean(axis=(0, 1))
+    centre = image[230:250, 310:330, :3].mean(axis=(0, 1))
     assert centre[2] > centre[0] + 0.05, "the ball of water in the middle is blue"
