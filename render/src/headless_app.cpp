@@ -42,39 +42,42 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
   if (options.dump_buffers) std::filesystem::create_directories(buffers_dir);
 
   VulkanContext ctx({options.validation, {}, false});
-  FluidRenderer renderer(ctx, source.scene(), options.settings);
-  OrbitCamera camera = renderer.camera();
-  options.camera.apply(camera);
-  renderer.set_camera(camera);
-  std::fprintf(stderr, "haptic-render: headless on %s\n", renderer.describe().c_str());
-
   RunSummary summary;
   double gpu_ms_sum = 0.0;
-  const auto start = std::chrono::steady_clock::now();
-  Frame frame;
-  while (options.max_frames < 0 || summary.frames < options.max_frames) {
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (options.duration_s >= 0 && elapsed >= options.duration_s) break;
-    const FrameStatus status = source.next_frame(frame);
-    if (status == FrameStatus::end_of_stream) break;
-    if (status == FrameStatus::unchanged) {  // a live source with nothing new yet
-      std::this_thread::sleep_for(std::chrono::milliseconds(2));
-      continue;
+  {
+    FluidRenderer renderer(ctx, source.scene(), options.settings);
+    OrbitCamera camera = renderer.camera();
+    options.camera.apply(camera);
+    renderer.set_camera(camera);
+    std::fprintf(stderr, "haptic-render: headless on %s\n", renderer.describe().c_str());
+
+    const auto start = std::chrono::steady_clock::now();
+    Frame frame;
+    while (options.max_frames < 0 || summary.frames < options.max_frames) {
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (options.duration_s >= 0 && elapsed >= options.duration_s) break;
+      const FrameStatus status = source.next_frame(frame);
+      if (status == FrameStatus::end_of_stream) break;
+      if (status == FrameStatus::unchanged) {  // a live source with nothing new yet
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        continue;
+      }
+      renderer.set_frame(frame);
+      Rgba8Image image = renderer.render_to_image();
+      const PassTimes t = renderer.pass_times();
+      gpu_ms_sum += t.total_ms;
+      if (options.print_timings && t.valid)
+        std::fprintf(stderr,
+                     "haptic-render: frame %llu: %zu fluid particles, %.1f ms (scene %.1f, splat %.1f, filter %.1f, "
+                     "normals %.1f, composite %.1f, read-back %.1f)\n",
+                     static_cast<unsigned long long>(frame.index), frame.fluid_m.size(), t.total_ms, t.scene_ms,
+                     t.splat_ms, t.filter_ms, t.normals_ms, t.composite_ms, t.copy_out_ms);
+      write_png(options.out_dir / numbered("frame_", uint64_t(summary.frames), ".png"), image);
+      if (options.dump_buffers) dump_buffers(renderer, buffers_dir, uint64_t(summary.frames));
+      ++summary.frames;
     }
-    renderer.set_frame(frame);
-    Rgba8Image image = renderer.render_to_image();
-    const PassTimes t = renderer.pass_times();
-    gpu_ms_sum += t.total_ms;
-    if (options.print_timings && t.valid)
-      std::fprintf(stderr,
-                   "haptic-render: frame %llu: %zu fluid particles, %.1f ms (scene %.1f, splat %.1f, filter %.1f, "
-                   "normals %.1f, composite %.1f, read-back %.1f)\n",
-                   static_cast<unsigned long long>(frame.index), frame.fluid_m.size(), t.total_ms, t.scene_ms,
-                   t.splat_ms, t.filter_ms, t.normals_ms, t.composite_ms, t.copy_out_ms);
-    write_png(options.out_dir / numbered("frame_", uint64_t(summary.frames), ".png"), image);
-    if (options.dump_buffers) dump_buffers(renderer, buffers_dir, uint64_t(summary.frames));
-    ++summary.frames;
   }
+  ctx.destroy_device();  // count what the validation layer says about leaks too
   summary.mean_frame_ms = summary.frames ? gpu_ms_sum / double(summary.frames) : 0.0;
   summary.validation_messages = ctx.validation_errors() + ctx.validation_warnings();
   std::fprintf(stderr, "haptic-render: wrote %ld frames to %s (mean %.1f ms per frame)\n", summary.frames,

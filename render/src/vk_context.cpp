@@ -51,12 +51,17 @@ VulkanContext::VulkanContext(const ContextOptions& options) {
   create_device(options.swapchain);
 }
 
+void VulkanContext::destroy_device() {
+  if (!device_) return;
+  vkDeviceWaitIdle(device_);
+  vkDestroyCommandPool(device_, command_pool_, nullptr);
+  vkDestroyDevice(device_, nullptr);
+  device_ = VK_NULL_HANDLE;
+  command_pool_ = VK_NULL_HANDLE;
+}
+
 VulkanContext::~VulkanContext() {
-  if (device_) {
-    vkDeviceWaitIdle(device_);
-    vkDestroyCommandPool(device_, command_pool_, nullptr);
-    vkDestroyDevice(device_, nullptr);
-  }
+  destroy_device();
   if (messenger_) vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
   if (instance_) vkDestroyInstance(instance_, nullptr);
 }

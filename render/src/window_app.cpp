@@ -251,6 +251,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
       std::fprintf(stderr, "haptic-render: presented %ld frames (%.1f frames/s at the end)\n", summary.frames, render_fps);
     }
     vkDestroySurfaceKHR(ctx.instance(), surface, nullptr);
+    ctx.destroy_device();  // count what the validation layer says about leaks too
     summary.validation_messages = ctx.validation_errors() + ctx.validation_warnings();
   }
   glfwDestroyWindow(window);

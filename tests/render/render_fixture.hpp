@@ -20,6 +20,7 @@ class ValidatedRenderTest : public ::testing::Test {
  protected:
   void SetUp() override { ctx = std::make_unique<VulkanContext>(ContextOptions{true, {}, false}); }
   void TearDown() override {
+    ctx->destroy_device();  // leaks are reported here, while the counters are still readable
     std::string all;
     for (const auto& m : ctx->validation_messages()) all += m + "\n";
     EXPECT_EQ(ctx->validation_errors(), 0) << all;

@@ -52,6 +52,10 @@ class VulkanContext {
   VkCommandBuffer begin_one_time();
   void end_one_time(VkCommandBuffer cmd);
 
+  // Destroys the device now (the destructor does it otherwise), so that what the validation layer
+  // reports at device destruction (leaked objects) is counted while the counters can be read.
+  void destroy_device();
+
   int validation_warnings() const { return warnings_.load(); }
   int validation_errors() const { return errors_.load(); }
   std::vector<std::string> validation_messages() const;
