@@ -82,6 +82,99 @@ void draw_stats(TextOverlay& overlay, const Frame& frame, double render_fps, dou
   }
 }
 
+// The per-frame Vulkan objects of the window loop (one frame in flight).
+struct FrameSync {
+  explicit FrameSync(VulkanContext& c) : ctx(c) {
+    VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    alloc.commandPool = ctx.command_pool();
+    alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    alloc.commandBufferCount = 1;
+    vk_check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
+    VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    fence_info.flags = VK_FENCE_CREATE_SIGNALED_BIT;
+    vk_check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
+    VkSemaphoreCreateInfo sem_info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
+    vk_check(vkCreateSemaphore(ctx.device(), &sem_info, nullptr, &acquired), "vkCreateSemaphore");
+  }
+  ~FrameSync() {
+    vkDeviceWaitIdle(ctx.device());
+    vkDestroySemaphore(ctx.device(), acquired, nullptr);
+    vkDestroyFence(ctx.device(), fence, nullptr);
+    vkFreeCommandBuffers(ctx.device(), ctx.command_pool(), 1, &cmd);
+  }
+  void wait() { vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences"); }
+
+  VulkanContext& ctx;
+  VkCommandBuffer cmd = VK_NULL_HANDLE;
+  VkFence fence = VK_NULL_HANDLE;
+  VkSemaphore acquired = VK_NULL_HANDLE;  // swapchain image ready to be written
+};
+
+// After the renderer's passes: its output scaled onto the swapchain image, the overlay on top,
+// and (for --screenshot) a copy of exactly what is presented.
+void record_presentation(VkCommandBuffer cmd, const FluidRenderer& renderer, const Swapchain& swapchain,
+                         uint32_t index, TextOverlay& overlay, const HostBuffer* screenshot) {
+  const VkImage target = swapchain.image(index);
+  transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::undefined, state::transfer_dst);
+  const VkExtent2D src = renderer.output_extent(), dst = swapchain.extent();
+  VkImageBlit blit{};
+  blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  blit.srcOffsets[1] = {int32_t(src.width), int32_t(src.height), 1};
+  blit.dstOffsets[1] = {int32_t(dst.width), int32_t(dst.height), 1};
+  vkCmdBlitImage(cmd, renderer.output_image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
+                 VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_LINEAR);
+  transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_dst, state::colour_target);
+  overlay.record(cmd, swapchain.view(index), dst);
+  if (!screenshot) {
+    transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::colour_target, state::present);
+    return;
+  }
+  transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::colour_target, state::transfer_src);
+  VkBufferImageCopy copy{};
+  copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
+  copy.imageExtent = {dst.width, dst.height, 1};
+  vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot->buffer(), 1, &copy);
+  transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_src, state::present);
+}
+
+// Submits `sync.cmd` (after the image is acquired) and presents; false when the swapchain must be
+// recreated (window resized).
+bool submit_and_present(VulkanContext& ctx, FrameSync& sync, const Swapchain& swapchain, uint32_t index) {
+  VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_TRANSFER_BIT;
+  VkSemaphore done = swapchain.render_done(index);
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.waitSemaphoreCount = 1;
+  submit.pWaitSemaphores = &sync.acquired;
+  submit.pWaitDstStageMask = &wait_stage;
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &sync.cmd;
+  submit.signalSemaphoreCount = 1;
+  submit.pSignalSemaphores = &done;
+  vk_check(vkQueueSubmit(ctx.queue(), 1, &submit, sync.fence), "vkQueueSubmit");
+  VkPresentInfoKHR present{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
+  present.waitSemaphoreCount = 1;
+  present.pWaitSemaphores = &done;
+  present.swapchainCount = 1;
+  VkSwapchainKHR handle = swapchain.handle();
+  present.pSwapchains = &handle;
+  present.pImageIndices = &index;
+  const VkResult presented = vkQueuePresentKHR(ctx.queue(), &present);
+  if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR) return false;
+  vk_check(presented, "vkQueuePresentKHR");
+  return true;
+}
+
+void save_screenshot(const HostBuffer& pixels, VkExtent2D extent, VkFormat format, const std::filesystem::path& file) {
+  Rgba8Image image{extent.width, extent.height, {}};
+  const auto* bytes = static_cast<const uint8_t*>(pixels.mapped());
+  image.rgba.assign(bytes, bytes + size_t(image.width) * image.height * 4);
+  if (format == VK_FORMAT_B8G8R8A8_UNORM)
+    for (size_t i = 0; i < image.rgba.size(); i += 4) std::swap(image.rgba[i], image.rgba[i + 2]);
+  write_png(file, image);
+}
+
+double seconds(std::chrono::steady_clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
 }  // namespace
 
 RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
@@ -115,138 +208,77 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
       TextOverlay overlay(ctx, swapchain.format());
       std::fprintf(stderr, "haptic-render: window on %s\n", renderer.describe().c_str());
 
-      VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-      alloc.commandPool = ctx.command_pool();
-      alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-      alloc.commandBufferCount = 1;
-      VkCommandBuffer cmd;
-      vk_check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
-      VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-      fence_info.flags = VK_FENCE_CREATE_SIGNALED_BIT;
-      VkFence fence;
-      vk_check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
-      VkSemaphoreCreateInfo sem_info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-      VkSemaphore acquired;
-      vk_check(vkCreateSemaphore(ctx.device(), &sem_info, nullptr, &acquired), "vkCreateSemaphore");
-
+      FrameSync sync(ctx);
       HostBuffer screenshot;
-      VkExtent2D screenshot_extent{};
       Frame frame;
       bool have_frame = false;
       double first_sim_time_s = 0.0;
       double render_fps = 0, source_fps = 0;
-      auto last = std::chrono::steady_clock::now();
-      const auto start = last;
-      auto last_source = last;
+      const auto start = std::chrono::steady_clock::now();
+      auto last = start, last_source = start;
       while (!glfwWindowShouldClose(window)) {
         if (options.max_frames >= 0 && summary.frames >= options.max_frames) break;
         const auto now = std::chrono::steady_clock::now();
-        if (options.duration_s >= 0 && std::chrono::duration<double>(now - start).count() >= options.duration_s) break;
+        if (options.duration_s >= 0 && seconds(now - start) >= options.duration_s) break;
         glfwPollEvents();
         // The newest frame, never waiting for one: a finished replay keeps showing its last frame.
         // A recording (finite source) plays at its own pace: the next frame once its sim time is due.
-        const double wall_s = std::chrono::duration<double>(now - start).count();
-        const bool due = !have_frame || source.frame_count() < 0 || frame.sim_time_s - first_sim_time_s <= wall_s;
+        const bool due = !have_frame || source.frame_count() < 0 ||
+                         frame.sim_time_s - first_sim_time_s <= seconds(now - start);
         const bool fresh = due && source.next_frame(frame) == FrameStatus::new_frame;
-        if (fresh && !have_frame) first_sim_time_s = frame.sim_time_s;
         if (fresh) {
-          const double dt = std::chrono::duration<double>(now - last_source).count();
+          if (!have_frame) first_sim_time_s = frame.sim_time_s;
+          const double dt = seconds(now - last_source);
           if (have_frame && dt > 0) source_fps = 0.9 * source_fps + 0.1 / dt;
           last_source = now;
           have_frame = true;
         }
 
-        vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+        sync.wait();
         const PassTimes times = renderer.pass_times();
         uint32_t index = 0;
-        VkResult acquire = vkAcquireNextImageKHR(ctx.device(), swapchain.handle(), UINT64_MAX, acquired, VK_NULL_HANDLE, &index);
+        const VkResult acquire =
+            vkAcquireNextImageKHR(ctx.device(), swapchain.handle(), UINT64_MAX, sync.acquired, VK_NULL_HANDLE, &index);
         if (acquire == VK_ERROR_OUT_OF_DATE_KHR) {
           swapchain.recreate(window);
           continue;
         }
         if (acquire != VK_SUBOPTIMAL_KHR) vk_check(acquire, "vkAcquireNextImageKHR");
-        vk_check(vkResetFences(ctx.device(), 1, &fence), "vkResetFences");
+        vk_check(vkResetFences(ctx.device(), 1, &sync.fence), "vkResetFences");
 
         renderer.set_camera(camera);
         if (fresh) renderer.set_frame(frame);  // the GPU is done with the previous one (fence)
         draw_stats(overlay, frame, render_fps, source_fps, times);
-
-        vk_check(vkResetCommandBuffer(cmd, 0), "vkResetCommandBuffer");
-        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-        vk_check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
-        renderer.record(cmd);
-        const VkImage target = swapchain.image(index);
-        transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::undefined, state::transfer_dst);
-        const VkExtent2D src = renderer.output_extent(), dst = swapchain.extent();
-        VkImageBlit blit{};
-        blit.srcSubresource = blit.dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-        blit.srcOffsets[1] = {int32_t(src.width), int32_t(src.height), 1};
-        blit.dstOffsets[1] = {int32_t(dst.width), int32_t(dst.height), 1};
-        vkCmdBlitImage(cmd, renderer.output_image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, target,
-                       VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &blit, VK_FILTER_LINEAR);
-        transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_dst, state::colour_target);
-        overlay.record(cmd, swapchain.view(index), dst);
         const bool last_frame = options.max_frames >= 0 && summary.frames + 1 == options.max_frames;
         const bool take_screenshot = last_frame && !options.screenshot.empty();
-        if (take_screenshot) {  // exactly what is presented, overlay included
-          screenshot = HostBuffer(ctx, VkDeviceSize(dst.width) * dst.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
-          transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::colour_target, state::transfer_src);
-          VkBufferImageCopy copy{};
-          copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
-          copy.imageExtent = {dst.width, dst.height, 1};
-          vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot.buffer(), 1, &copy);
-          transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_src, state::present);
-          screenshot_extent = dst;
-        } else {
-          transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::colour_target, state::present);
-        }
-        vk_check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer");
+        if (take_screenshot)
+          screenshot = HostBuffer(ctx, VkDeviceSize(swapchain.extent().width) * swapchain.extent().height * 4,
+                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT);
 
-        VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_TRANSFER_BIT;
-        VkSemaphore done = swapchain.render_done(index);
-        VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
-        submit.waitSemaphoreCount = 1;
-        submit.pWaitSemaphores = &acquired;
-        submit.pWaitDstStageMask = &wait_stage;
-        submit.commandBufferCount = 1;
-        submit.pCommandBuffers = &cmd;
-        submit.signalSemaphoreCount = 1;
-        submit.pSignalSemaphores = &done;
-        vk_check(vkQueueSubmit(ctx.queue(), 1, &submit, fence), "vkQueueSubmit");
-        VkPresentInfoKHR present{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
-        present.waitSemaphoreCount = 1;
-        present.pWaitSemaphores = &done;
-        present.swapchainCount = 1;
-        VkSwapchainKHR handle = swapchain.handle();
-        present.pSwapchains = &handle;
-        present.pImageIndices = &index;
-        VkResult presented = vkQueuePresentKHR(ctx.queue(), &present);
-        if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR) {
-          vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+        vk_check(vkResetCommandBuffer(sync.cmd, 0), "vkResetCommandBuffer");
+        VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+        begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+        vk_check(vkBeginCommandBuffer(sync.cmd, &begin), "vkBeginCommandBuffer");
+        renderer.record(sync.cmd);
+        record_presentation(sync.cmd, renderer, swapchain, index, overlay, take_screenshot ? &screenshot : nullptr);
+        vk_check(vkEndCommandBuffer(sync.cmd), "vkEndCommandBuffer");
+        const VkExtent2D presented_extent = swapchain.extent();  // before a possible recreation
+        if (!submit_and_present(ctx, sync, swapchain, index)) {
+          sync.wait();
           swapchain.recreate(window);
-        } else {
-          vk_check(presented, "vkQueuePresentKHR");
         }
+        if (take_screenshot) {
+          sync.wait();
+          save_screenshot(screenshot, presented_extent, swapchain.format(), options.screenshot);
+        }
+
         ++summary.frames;
         const auto after = std::chrono::steady_clock::now();
-        const double dt = std::chrono::duration<double>(after - last).count();
+        const double dt = seconds(after - last);
         last = after;
         if (dt > 0) render_fps = render_fps == 0 ? 1.0 / dt : 0.9 * render_fps + 0.1 / dt;
         summary.mean_frame_ms += times.total_ms;
       }
-      vkDeviceWaitIdle(ctx.device());
-      if (screenshot.buffer()) {
-        Rgba8Image image{screenshot_extent.width, screenshot_extent.height, {}};
-        const auto* bytes = static_cast<const uint8_t*>(screenshot.mapped());
-        image.rgba.assign(bytes, bytes + size_t(image.width) * image.height * 4);
-        if (swapchain.format() == VK_FORMAT_B8G8R8A8_UNORM)
-          for (size_t i = 0; i < image.rgba.size(); i += 4) std::swap(image.rgba[i], image.rgba[i + 2]);
-        write_png(options.screenshot, image);
-      }
-      vkDestroySemaphore(ctx.device(), acquired, nullptr);
-      vkDestroyFence(ctx.device(), fence, nullptr);
-      vkFreeCommandBuffers(ctx.device(), ctx.command_pool(), 1, &cmd);
       if (summary.frames) summary.mean_frame_ms /= double(summary.frames);
       std::fprintf(stderr, "haptic-render: presented %ld frames (%.1f frames/s at the end)\n", summary.frames, render_fps);
     }
