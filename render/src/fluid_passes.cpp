@@ -62,7 +62,7 @@ void FluidRenderer::Impl::classify_tiles(const OrbitCamera& camera, CompositeMod
   std::memcpy(tile_buffer.mapped(), tiles.data(), tiles.size() * sizeof(uint32_t));
 }
 
-void FluidRenderer::Impl::record_scene(VkCommandBuffer cmd) {
+void FluidRenderer::Impl::record_scene(VkCommandBuffer cmd, const OrbitCamera& camera) {
   transition(cmd, targets.scene_colour, state::undefined, state::colour_target);
   transition(cmd, targets.scene_depth, state::undefined, state::colour_target);
   transition(cmd, targets.zbuffer, state::undefined, state::depth_target);
@@ -89,7 +89,9 @@ void FluidRenderer::Impl::record_scene(VkCommandBuffer cmd) {
   VkDeviceSize offset = 0;
   VkBuffer vb = scene_vertices.buffer();
   vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
+  const glm::vec3 eye = camera.eye_m();
   for (const DrawRange& range : geometry.draws) {
+    if (range.wall && glm::dot(range.wall_inward_normal, eye - range.wall_point_m) <= 0.0f) continue;  // in front
     ScenePush push{glm::mat4(1.0f), glm::vec4(range.colour, 1.0f), glm::vec4(range.checker_size_m, 0, 0, 0)};
     if (range.body >= 0 && size_t(range.body) < body_poses.size()) {
       const BodyPose& pose = body_poses[size_t(range.body)];
@@ -200,7 +202,7 @@ void FluidRenderer::Impl::record(VkCommandBuffer c, const OrbitCamera& camera, C
   write_uniforms(camera);
   classify_tiles(camera, mode);
   timer.begin(c);
-  record_scene(c);
+  record_scene(c, camera);
   timer.stamp(c);
   record_splat(c);
   timer.stamp(c);

@@ -71,7 +71,7 @@ struct FluidRenderer::Impl {
   void write_uniforms(const OrbitCamera& camera);
   void classify_tiles(const OrbitCamera& camera, CompositeMode mode);
   void record(VkCommandBuffer cmd, const OrbitCamera& camera, CompositeMode mode);
-  void record_scene(VkCommandBuffer cmd);
+  void record_scene(VkCommandBuffer cmd, const OrbitCamera& camera);
   void record_splat(VkCommandBuffer cmd);
   const GpuImage& record_filter(VkCommandBuffer cmd);
   void record_normals(VkCommandBuffer cmd);

@@ -19,6 +19,8 @@ SceneDescription describe_scene(const config::Scene& scene) {
   d.floor_half_extent_m = 0.75 * std::max(hi.x - lo.x, hi.y - lo.y);
   d.look_at_m = glm::vec3(0.5f * (lo.x + hi.x), 0.5f * (lo.y + hi.y), lo.z + 0.3f * (hi.z - lo.z));
   d.view_distance_m = 1.4 * glm::length(hi - lo);
+  const auto& w = scene.domain.walls;
+  d.walls = {true, lo, hi, w.x_min, w.x_max, w.y_min, w.y_max};
   // Distinguishable tool colours: steel, wood, ceramic, red plastic.
   const glm::vec3 palette[] = {{0.75f, 0.76f, 0.78f}, {0.70f, 0.52f, 0.32f}, {0.92f, 0.90f, 0.86f}, {0.80f, 0.25f, 0.20f}};
   for (size_t i = 0; i < scene.bodies.size(); ++i) {

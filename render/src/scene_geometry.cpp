@@ -14,6 +14,26 @@ SceneGeometry build_scene_geometry(const SceneDescription& scene) {
   for (int i : {0, 1, 2, 0, 2, 3}) g.vertices.push_back({corners[i], up});
   g.draws.push_back({0, 6, -1, 1.0, glm::vec3(0.85f, 0.85f, 0.82f), float(g.checker_size_m)});
 
+  const ContainerWalls& w = scene.walls;
+  if (w.present) {
+    const glm::vec3 lo = w.min_m, hi = w.max_m;
+    auto wall = [&](glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 d, glm::vec3 inward) {
+      DrawRange range;
+      range.first_vertex = uint32_t(g.vertices.size());
+      for (const glm::vec3& p : {a, b, c, a, c, d}) g.vertices.push_back({p, inward});
+      range.vertex_count = 6;
+      range.colour = glm::vec3(0.78f, 0.80f, 0.83f);
+      range.wall = true;
+      range.wall_point_m = a;
+      range.wall_inward_normal = inward;
+      g.draws.push_back(range);
+    };
+    if (w.x_min) wall({lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {lo.x, hi.y, hi.z}, {lo.x, lo.y, hi.z}, {1, 0, 0});
+    if (w.x_max) wall({hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {hi.x, lo.y, hi.z}, {-1, 0, 0});
+    if (w.y_min) wall({lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, lo.y, hi.z}, {lo.x, lo.y, hi.z}, {0, 1, 0});
+    if (w.y_max) wall({lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}, {0, -1, 0});
+  }
+
   for (size_t b = 0; b < scene.bodies.size(); ++b) {
     const BodyMesh& body = scene.bodies[b];
     DrawRange range;

@@ -21,6 +21,10 @@ struct DrawRange {
   double scale = 1.0;
   glm::vec3 colour{1.0f};
   float checker_size_m = 0.0f;   // > 0: checkerboard
+  // A container wall: drawn only while the eye is on the inner side of this plane
+  // (inward normal . (eye - point) > 0), i.e. when the wall is behind the fluid.
+  bool wall = false;
+  glm::vec3 wall_point_m{0.0f}, wall_inward_normal{0.0f};
 };
 
 struct SceneGeometry {

@@ -196,3 +196,25 @@ TEST_F(ValidatedRenderTest, ExtinctionGivesEachFluidItsColour) {
   EXPECT_GT(water.b, water.r + 20.0f) << "water " << water.r << " " << water.g << " " << water.b;
   EXPECT_GT(honey.r, honey.b + 40.0f) << "honey " << honey.r << " " << honey.g << " " << honey.b;
 }
+
+TEST_F(ValidatedRenderTest, ContainerWallsShowBehindTheFluidAndNeverInFrontOfIt) {
+  // The domain's side walls frame the fluid; the ones between the camera and the fluid are left
+  // out, so a user always sees the fluid the haptic device is pushing.
+  SceneDescription scene = ball_scene();
+  scene.walls = {true, {-0.3f, -0.3f, 0.0f}, {0.3f, 0.3f, 0.4f}, true, true, true, true};
+  RenderSettings s = small_settings();
+  FluidRenderer renderer(*ctx, scene, s);
+  OrbitCamera camera = close_camera(renderer);
+  camera.distance_m = 1.2f;  // outside the box, on its -y side
+  renderer.set_camera(camera);
+  renderer.set_frame(ball_frame());
+  const Rgba8Image image = renderer.render_to_image();
+  const glm::ivec2 centre = project(camera, ball_centre_m, image.width, image.height);
+  const uint8_t* fluid = image.pixel(centre.x, centre.y);
+  EXPECT_GT(int(fluid[2]), int(fluid[0]) + 20) << "the ball of water is visible through the near wall's gap";
+  // Above the ball: the far (y_max) wall, grey, instead of the blue-grey sky.
+  const glm::ivec2 above = project(camera, glm::vec3(0.0f, 0.3f, 0.35f), image.width, image.height);
+  const uint8_t* wall = image.pixel(above.x, above.y);
+  EXPECT_LT(std::abs(int(wall[0]) - int(wall[2])), 12) << "far wall expected, got " << int(wall[0]) << " "
+                                                       << int(wall[1]) << " " << int(wall[2]);
+}

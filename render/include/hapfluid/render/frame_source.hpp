@@ -33,6 +33,14 @@ struct BodyMesh {
   BodyPose initial_pose;      // the scene file's pose, used until a frame says otherwise
 };
 
+// The simulation domain's side walls (the container the fluid sits in). Only the walls behind
+// the fluid as seen from the camera are drawn, so the box never hides what is inside it.
+struct ContainerWalls {
+  bool present = false;
+  glm::vec3 min_m{0.0f}, max_m{0.0f};
+  bool x_min = false, x_max = false, y_min = false, y_max = false;
+};
+
 struct SceneDescription {
   std::string name;
   std::vector<BodyMesh> bodies;
@@ -42,6 +50,7 @@ struct SceneDescription {
   double floor_half_extent_m = 1.0;
   glm::vec3 look_at_m{0.0f};        // where the camera looks by default
   double view_distance_m = 1.5;     // default camera distance
+  ContainerWalls walls;
 };
 
 // A haptic device's rendered force, for the on-screen force bars (from the device-states
