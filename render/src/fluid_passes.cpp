@@ -49,16 +49,15 @@ void FluidRenderer::Impl::write_uniforms(const OrbitCamera& camera) {
   std::memcpy(uniforms.mapped(), &u, sizeof u);
 }
 
-void FluidRenderer::Impl::classify_tiles(const OrbitCamera& camera, CompositeMode mode) {
-  if (mode != CompositeMode::fluid) {
-    all_tiles(grid, tiles);  // debug views paint pixels without fluid black
-  } else if (settings.debug_spheres) {
-    tiles.clear();  // no fluid surface: the output is the scene with its spheres
-  } else {
-    find_fluid_tiles(fluid_cpu, splat_radius(), camera.view(),
-                     camera.projection(float(settings.width) / float(settings.height)), camera.near_m, grid, tile_marks,
-                     tiles);
-  }
+void FluidRenderer::Impl::cull_and_classify(const OrbitCamera& camera, CompositeMode mode) {
+  // The visible particles go straight into the GPU buffer the splat pass reads (the GPU is not
+  // using it: the previous frame has completed).
+  auto* visible = static_cast<glm::vec3*>(fluid_particles.mapped());
+  fluid_count = uint32_t(find_fluid_tiles(fluid_cpu, splat_radius(), camera.view(),
+                                          camera.projection(float(settings.width) / float(settings.height)),
+                                          camera.near_m, grid, tile_marks, tiles, visible));
+  if (mode != CompositeMode::fluid) all_tiles(grid, tiles);  // debug views paint pixels without fluid black
+  if (settings.debug_spheres) fluid_count = 0, tiles.clear();  // the output is the scene with its spheres
   std::memcpy(tile_buffer.mapped(), tiles.data(), tiles.size() * sizeof(uint32_t));
 }
 
@@ -128,7 +127,7 @@ void FluidRenderer::Impl::record_splat(VkCommandBuffer cmd) {
   info.colorAttachmentCount = 1;
   info.pColorAttachments = &colour;
   vkCmdBeginRendering(cmd, &info);
-  const uint32_t instances = settings.debug_spheres ? 0 : fluid_count;
+  const uint32_t instances = fluid_count;  // visible splats (cull_and_classify)
   if (instances > 0) {
     set_viewport(cmd, targets.half);
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, splat_pipeline);
@@ -200,7 +199,7 @@ void FluidRenderer::Impl::record_composite(VkCommandBuffer cmd, CompositeMode mo
 
 void FluidRenderer::Impl::record(VkCommandBuffer c, const OrbitCamera& camera, CompositeMode mode) {
   write_uniforms(camera);
-  classify_tiles(camera, mode);
+  cull_and_classify(camera, mode);
   timer.begin(c);
   record_scene(c, camera);
   timer.stamp(c);

@@ -31,9 +31,7 @@ void FluidRenderer::set_frame(const Frame& frame) {
   Impl& m = *impl_;
   m.body_poses = frame.body_poses;
   m.fluid_cpu.assign(frame.fluid_m.begin(), frame.fluid_m.end());
-  m.fluid_count = uint32_t(frame.fluid_m.size());
   m.ensure_fluid_capacity(frame.fluid_m.size());
-  std::memcpy(m.fluid_particles.mapped(), frame.fluid_m.data(), frame.fluid_m.size() * sizeof(glm::vec3));
   m.sphere_count = 0;
   if (m.settings.debug_spheres) {
     const size_t n = frame.fluid_m.size() + frame.solid_m.size();

@@ -41,9 +41,9 @@ struct FluidRenderer::Impl {
 
   HostBuffer uniforms, scene_vertices, fluid_particles, sphere_particles, readback, tile_buffer;
   size_t fluid_capacity = 0;
-  uint32_t fluid_count = 0, sphere_count = 0;
+  uint32_t fluid_count = 0, sphere_count = 0;  // fluid: visible splats of this frame
   std::vector<BodyPose> body_poses;
-  std::vector<glm::vec3> fluid_cpu;  // for the tile classification
+  std::vector<glm::vec3> fluid_cpu;  // every fluid particle; culled per frame into fluid_particles
   TileGrid grid{};
   std::vector<uint8_t> tile_marks;
   std::vector<uint32_t> tiles;
@@ -69,7 +69,7 @@ struct FluidRenderer::Impl {
   void create_descriptors();
   void create_pipelines();
   void write_uniforms(const OrbitCamera& camera);
-  void classify_tiles(const OrbitCamera& camera, CompositeMode mode);
+  void cull_and_classify(const OrbitCamera& camera, CompositeMode mode);
   void record(VkCommandBuffer cmd, const OrbitCamera& camera, CompositeMode mode);
   void record_scene(VkCommandBuffer cmd, const OrbitCamera& camera);
   void record_splat(VkCommandBuffer cmd);

@@ -5,8 +5,10 @@
 
 namespace hapfluid::render {
 
-void find_fluid_tiles(const std::vector<glm::vec3>& centres, float radius, const glm::mat4& view, const glm::mat4& proj,
-                      float near_m, const TileGrid& grid, std::vector<uint8_t>& marks, std::vector<uint32_t>& tiles) {
+size_t find_fluid_tiles(const std::vector<glm::vec3>& centres, float radius, const glm::mat4& view, const glm::mat4& proj,
+                        float near_m, const TileGrid& grid, std::vector<uint8_t>& marks, std::vector<uint32_t>& tiles,
+                        glm::vec3* visible) {
+  size_t visible_count = 0;
   const uint32_t nx = grid.tiles_x(), ny = grid.tiles_y();
   marks.assign(size_t(nx) * ny, 0);
   tiles.clear();
@@ -25,7 +27,9 @@ void find_fluid_tiles(const std::vector<glm::vec3>& centres, float radius, const
     // ndc -> texel, one texel of margin for rasterisation rounding and the filter's reach.
     const float x0 = (std::min(xa, xb) * 0.5f + 0.5f) * w - 1.0f, x1 = (std::max(xa, xb) * 0.5f + 0.5f) * w + 1.0f;
     const float y0 = (std::min(ya, yb) * 0.5f + 0.5f) * h - 1.0f, y1 = (std::max(ya, yb) * 0.5f + 0.5f) * h + 1.0f;
-    if (x1 < 0.0f || y1 < 0.0f || x0 >= w || y0 >= h) continue;
+    if (x1 < 0.0f || y1 < 0.0f || x0 >= w || y0 >= h) continue;  // off screen: not drawn either
+    if (visible) visible[visible_count] = c;
+    ++visible_count;
     const int tx0 = std::clamp(int(std::floor(x0)) / int(fluid_tile_texels), 0, max_tx);
     const int tx1 = std::clamp(int(std::floor(x1)) / int(fluid_tile_texels), 0, max_tx);
     const int ty0 = std::clamp(int(std::floor(y0)) / int(fluid_tile_texels), 0, max_ty);
@@ -36,6 +40,7 @@ void find_fluid_tiles(const std::vector<glm::vec3>& centres, float radius, const
   for (uint32_t ty = 0; ty < ny; ++ty)
     for (uint32_t tx = 0; tx < nx; ++tx)
       if (marks[size_t(ty) * nx + tx]) tiles.push_back(tx | (ty << 16));
+  return visible_count;
 }
 
 void all_tiles(const TileGrid& grid, std::vector<uint32_t>& tiles) {

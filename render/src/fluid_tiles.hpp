@@ -22,10 +22,12 @@ struct TileGrid {
 
 // Appends to `tiles` (cleared first) the packed index (x | y << 16) of every tile touched by a
 // splat of radius `splat_radius_m` around one of `centres_m`, seen through `view` and the
-// symmetric perspective `proj`. `scratch` is reused between frames to avoid allocation.
-void find_fluid_tiles(const std::vector<glm::vec3>& centres_m, float splat_radius_m, const glm::mat4& view,
-                      const glm::mat4& proj, float near_m, const TileGrid& grid, std::vector<uint8_t>& scratch,
-                      std::vector<uint32_t>& tiles);
+// symmetric perspective `proj`, and writes to `visible_m` (if given) the centres of the splats
+// that reach the screen at all: only those are drawn (frustum culling). `scratch` is reused
+// between frames to avoid allocation. Returns the number of visible centres.
+size_t find_fluid_tiles(const std::vector<glm::vec3>& centres_m, float splat_radius_m, const glm::mat4& view,
+                        const glm::mat4& proj, float near_m, const TileGrid& grid, std::vector<uint8_t>& scratch,
+                        std::vector<uint32_t>& tiles, glm::vec3* visible_m = nullptr);
 
 // Every tile of the grid (debug views that colour pixels without fluid too).
 void all_tiles(const TileGrid& grid, std::vector<uint32_t>& tiles);

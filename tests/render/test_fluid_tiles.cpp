@@ -26,9 +26,11 @@ struct TileScene {
   std::vector<uint32_t> tiles_of(const std::vector<glm::vec3>& centres, float radius_m = 0.012f) {
     std::vector<uint8_t> scratch;
     std::vector<uint32_t> tiles;
-    find_fluid_tiles(centres, radius_m, view, proj, camera.near_m, grid, scratch, tiles);
+    visible.assign(centres.size(), glm::vec3(0.0f));
+    visible.resize(find_fluid_tiles(centres, radius_m, view, proj, camera.near_m, grid, scratch, tiles, visible.data()));
     return tiles;
   }
+  std::vector<glm::vec3> visible;  // the splats the last tiles_of() call kept for drawing
 };
 
 }  // namespace
@@ -63,6 +65,18 @@ TEST(FluidTiles, ASplatStraddlingTheScreenEdgeMarksTheEdgeTile) {
   const auto tiles = s.tiles_of({world});
   ASSERT_FALSE(tiles.empty());
   for (uint32_t t : tiles) EXPECT_EQ(t & 0xffff, 0u);
+  EXPECT_EQ(s.visible.size(), 1u) << "a splat that reaches into the picture is drawn";
+}
+
+TEST(FluidTiles, SplatsEntirelyOffScreenAreCulled) {
+  TileScene s;
+  const glm::mat4 inverse_view = glm::inverse(s.view);
+  const float half_width_at_1m = 1.0f / s.proj[0][0];
+  const glm::vec3 off_screen = glm::vec3(inverse_view * glm::vec4(-half_width_at_1m - 0.1f, 0.0f, -1.0f, 1.0f));
+  const glm::vec3 on_screen = glm::vec3(inverse_view * glm::vec4(0.1f, 0.05f, -1.0f, 1.0f));
+  s.tiles_of({off_screen, on_screen, off_screen});
+  ASSERT_EQ(s.visible.size(), 1u);
+  EXPECT_NEAR(glm::distance(s.visible[0], on_screen), 0.0f, 1e-6f);
 }
 
 TEST(FluidTiles, AllTilesCoverTheBufferIncludingPartialTiles) {

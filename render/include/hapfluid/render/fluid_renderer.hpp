@@ -52,11 +52,14 @@ class FluidRenderer {
 
   void set_camera(const OrbitCamera& camera) { camera_ = camera; }
   const OrbitCamera& camera() const { return camera_; }
-  // Copies particles and body poses into GPU-visible memory. The GPU must not be using the
-  // previous frame's data (headless: always true; windowed: after the frame fence).
+  // Keeps the frame's particles and body poses for the next record() (growing GPU buffers waits
+  // for the GPU to go idle).
   void set_frame(const Frame& frame);
 
-  // Records every pass into `cmd`; the output image ends in TRANSFER_SRC_OPTIMAL layout.
+  // Culls the particles against the camera and writes the visible ones and the per-frame values
+  // into GPU-visible memory, so the previous frame must have completed (headless: always;
+  // windowed: after its fence). Then records every pass into `cmd`; the output image ends in
+  // TRANSFER_SRC_OPTIMAL layout.
   void record(VkCommandBuffer cmd, CompositeMode mode = CompositeMode::fluid);
   VkImage output_image() const;
   VkExtent2D output_extent() const;
