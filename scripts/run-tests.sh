@@ -5,6 +5,7 @@
 set -uo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-build}"
+case "$build" in /*) ;; *) build="$here/$build" ;; esac
 cd "$here"
 
 echo "== C/C++ tests (ctest) =="
@@ -12,7 +13,7 @@ ctest --test-dir "$build" --output-on-failure -j "$(nproc)" --timeout 600
 ctest_rc=$?
 
 echo "== Python tests (pytest) =="
-HAPFLUID_BUILD="$here/$build" "$here/.venv/bin/python" -m pytest -q -p no:cacheprovider tests
+HAPFLUID_BUILD="$build" "$here/.venv/bin/python" -m pytest -q -p no:cacheprovider tests
 py_rc=$?
 if [ "$py_rc" -eq 5 ]; then
   echo "pytest: no Python tests were collected"

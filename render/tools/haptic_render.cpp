@@ -13,6 +13,8 @@
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/render/apps.hpp"
 #include "hapfluid/render/replay_source.hpp"
+#include "hapfluid/render/scene_description.hpp"
+#include "hapfluid/render/shm_source.hpp"
 #include "hapfluid/render/synthetic_source.hpp"
 
 using namespace hapfluid;
@@ -31,7 +33,10 @@ sources:
   --look NAME            override the scene's fluid look: water, batter, honey or syrup
   --synthetic ball|pool  a fixed particle set (no simulator): a ball of fluid, or a pool
   --particles N          synthetic pool: number of particles (default 32768)
-  (the live shared-memory channel of haptic-sim is added with rt_core's hapfluid_shm)
+  --live --scene FILE    the running haptic-sim's particles channel (shared memory), drawn as it
+                         comes; waits for the simulator and follows its restarts
+  --shm-prefix NAME      live: the rig's rt.shm.prefix (default "hapfluid")
+  --max-force N          live: force shown as a full bar, newtons (default 10)
 options:
   --frames N             stop after N frames          --duration S   stop after S seconds
   --width W --height H   output size (default 1024x768; fluid buffers are half of it)
@@ -47,7 +52,9 @@ options:
 
 struct Args {
   bool headless = false, spheres = false, dump = false, mp4 = true, timings = false, validation = false;
-  std::string out, replay, scene, kind_field = "kind", synthetic, screenshot, look;
+  std::string out, replay, scene, kind_field = "kind", synthetic, screenshot, look, shm_prefix = "hapfluid";
+  bool live = false;
+  double max_force_n = 10.0;
   long frames = -1, particles = 32768;
   double duration = -1;
   RenderSettings settings;
@@ -83,6 +90,9 @@ Args parse(int argc, char** argv) {
     else if (o == "--kind-field") a.kind_field = value();
     else if (o == "--look") a.look = value();
     else if (o == "--synthetic") a.synthetic = value();
+    else if (o == "--live") a.live = true;
+    else if (o == "--shm-prefix") a.shm_prefix = value();
+    else if (o == "--max-force") a.max_force_n = number("--max-force", value(), 1e-3, 1e4);
     else if (o == "--particles") a.particles = long(number("--particles", value(), 1, 4e6));
     else if (o == "--frames") a.frames = long(number("--frames", value(), 1, 1e9));
     else if (o == "--duration") a.duration = number("--duration", value(), 0, 1e7);
@@ -134,10 +144,17 @@ std::filesystem::path scene_of_run(const std::filesystem::path& run) {
   return run / scene;
 }
 
-// The frame sources. The live one (the sim's particles channel, rt_core's hapfluid_shm) plugs in
-// here as another FrameSource whose next_frame() copies the newest complete frame without
-// blocking the writer and returns FrameStatus::unchanged when there is nothing newer.
+// The frame sources: live (the sim's particles channel), a recorded run, or a fixed particle set.
 std::unique_ptr<FrameSource> make_source(const Args& a) {
+  if (a.live) {
+    if (a.scene.empty()) bad("--live needs --scene FILE (the scene the simulator runs: meshes, look, domain)");
+    config::Scene scene = config::load_scene(a.scene);
+    if (!a.look.empty()) scene.fluid.look = look_named(a.look);
+    ShmSourceOptions options;
+    options.prefix = a.shm_prefix;
+    options.max_force_n = a.max_force_n;
+    return std::make_unique<ShmSource>(describe_scene(scene), options);
+  }
   if (!a.replay.empty()) {
     const std::filesystem::path scene_file = a.scene.empty() ? scene_of_run(a.replay) : std::filesystem::path(a.scene);
     if (scene_file.empty() || !std::filesystem::exists(scene_file))
@@ -158,8 +175,7 @@ std::unique_ptr<FrameSource> make_source(const Args& a) {
     const long frames = a.frames > 0 ? a.frames : (a.headless && a.duration < 0 ? 1 : 1000000000L);
     return std::make_unique<SyntheticSource>(scene, std::vector<Frame>{frame}, int(std::min(frames, 1000000000L)));
   }
-  bad("no frame source: give --replay RUN_DIR or --synthetic ball|pool (the live shared-memory source comes "
-      "with rt_core's hapfluid_shm)");
+  bad("no frame source: give --live --scene FILE, --replay RUN_DIR or --synthetic ball|pool");
 }
 
 }  // namespace
