@@ -79,9 +79,11 @@ bool FakeFirmware::receive(const hf_message& m, double t_s) {
 }
 
 void FakeFirmware::step(double t_s, double dt_s, const config::PoseTwist& hand) {
-  // Command watchdog: silence for watchdog_ms while enabled -> motors off, latched fault.
+  // Command watchdog: silence of watchdog_ms while enabled -> motors off, latched fault.
   const double silence_ms = last_command_s_ < 0 ? 0 : (t_s - last_command_s_) * 1e3;
-  if ((command_.flags & HF_CMD_ENABLE) && silence_ms > model_.watchdog_ms && !(faults_ & HF_FAULT_COMMAND_WATCHDOG)) {
+  // (1e-6 ms absorbs the rounding of t_s; the rule is "watchdog_ms or more without a command")
+  if ((command_.flags & HF_CMD_ENABLE) && silence_ms >= model_.watchdog_ms - 1e-6 &&
+      !(faults_ & HF_FAULT_COMMAND_WATCHDOG)) {
     raise(HF_FAULT_COMMAND_WATCHDOG, 0, static_cast<std::uint32_t>(silence_ms));
     watchdog_trip_s_ = t_s;
   }

@@ -112,7 +112,7 @@ int run(const Options& o) {
   // states are counted by sequence progress: poll() keeps only the newest of a tick's states
   const std::uint32_t modulus = arm ? arm->link().sequence_modulus() : 65536u;
   std::uint64_t progressed = 0;
-  double longest_gap_ms = 0;
+  double longest_gap_ms = 0, max_abs_position_m = 0;
   std::uint64_t late_half = 0;
   while (true) {
     wake += 1'000'000;
@@ -122,7 +122,7 @@ int run(const Options& o) {
     if (now > wake + 1'000'000) wake = now;
     const double t = (now - t0) * 1e-9;
     if (t >= o.duration_s) break;
-    while (dev->poll(state)) {}  // poll drains everything; loop only in case frames raced in
+    dev->poll(state);  // drains everything pending, keeps the newest state
     if (state.host_receive_ns && state.host_receive_ns != last_state.host_receive_ns) {
       ++states;
       if (first_state_ns) {
@@ -140,6 +140,7 @@ int run(const Options& o) {
         rtt_us.push_back((state.host_receive_ns - sent_ns[echo]) * 1e-3);
       }
       last_echo = echo;
+      for (int i = 0; i < 3; ++i) max_abs_position_m = std::max(max_abs_position_m, std::fabs(state.position_m[i]));
       if (t > o.duration_s / 2) {
         ++late_half;
         for (int i = 0; i < 3; ++i) sum_pos[i] += state.position_m[i];
@@ -172,7 +173,7 @@ int run(const Options& o) {
       "\"frames_ok\": %llu, \"frames_bad\": %llu, \"sequence_gaps\": %llu, \"commands_sent\": %llu, "
       "\"send_errors\": %llu, \"transport_errors\": %u, \"transport_errors_now\": %u, \"connected\": %s, "
       "\"faults_seen\": %u, \"status_seen\": %u, \"final_faults\": %u, \"final_status\": %u, "
-      "\"mean_position_late_half_m\": [%.6f, %.6f, %.6f], "
+      "\"mean_position_late_half_m\": [%.6f, %.6f, %.6f], \"max_abs_position_m\": %.6f, "
       "\"watchdog_seen_after_silence_ms\": %.3f, \"estop_seen_after_request_ms\": %.3f, "
       "\"info\": %s}\n",
       dev->name(), o.duration_s, static_cast<unsigned long long>(states), span_s > 0 ? progressed / span_s : 0.0, longest_gap_ms,
@@ -182,7 +183,7 @@ int run(const Options& o) {
       static_cast<unsigned long long>(h.send_errors), max_transport_errors, h.transport_errors,
       h.connected ? "true" : "false", faults_seen, status_seen, last_state.fault, last_state.status,
       late_half ? sum_pos[0] / late_half : 0, late_half ? sum_pos[1] / late_half : 0,
-      late_half ? sum_pos[2] / late_half : 0,
+      late_half ? sum_pos[2] / late_half : 0, max_abs_position_m,
       watchdog_seen_ns && silence_start_ns ? (static_cast<double>(watchdog_seen_ns) - silence_start_ns) * 1e-6 : -1.0,
       estop_seen_ns && o.estop_at_s >= 0 ? (estop_seen_ns - t0) * 1e-6 - o.estop_at_s * 1e3 : -1.0,
       arm && arm->has_info()
