@@ -120,8 +120,9 @@ Options parse(int argc, char** argv) {
     o.kind = d->kind == config::DeviceKind::spacemouse ? "spacemouse" : "haptic_arm";
   }
   if (o.device.transport.address.empty()) throw std::invalid_argument("--address (or --rig/--device) is required");
-  if (o.device.transport.kind == config::TransportKind::socketcan && o.device.transport.framing == "hid")
-    throw std::invalid_argument("--framing hid makes no sense on socketcan");
+  if (o.device.transport.kind == config::TransportKind::socketcan && o.device.transport.framing != "can" &&
+      o.device.transport.framing != "canfd")
+    throw std::invalid_argument("--framing " + o.device.transport.framing + ": SocketCAN carries can or canfd");
   if (o.kind != "haptic_arm" && o.kind != "spacemouse")
     throw std::invalid_argument("--kind " + o.kind + ": choose haptic_arm or spacemouse");
   if (o.drop_probability > 1) throw std::invalid_argument("--drop-probability must be within 0..1");

@@ -144,3 +144,33 @@ def test_unavailable_transport_fails_cleanly(programs):
                             capture_output=True, text=True, timeout=10)
     assert result.returncode == 2, "a clean error exit, not a crash"
     assert "SocketCAN" in result.stderr and "vcan" in result.stderr
+
+
+def _kernel_can_interface():
+    import pathlib
+    for name in ("vcan0", "can0"):
+        if (pathlib.Path("/sys/class/net") / name).exists():
+            return name
+    return None
+
+
+@pytest.mark.parametrize("framing", ["can", "canfd"])
+def test_same_exchange_on_real_socketcan_where_the_kernel_has_it(programs, framing):
+    # On a rig or in the QEMU guest of the hardware-in-the-loop suite (vcan0 with MTU 72) this runs
+    # the driver and the fake device on the kernel's SocketCAN instead of the loopback bus.
+    interface = _kernel_can_interface()
+    if interface is None:
+        pytest.skip("no vcan0/can0 in this kernel (ip link add vcan0 type vcan; ip link set vcan0 mtu 72 up)")
+    import json
+    import subprocess
+    fake, prober = programs
+    dev = subprocess.Popen([str(fake), "--transport", "socketcan", "--address", interface, "--framing", framing,
+                            "--node", "6", "--duration", "2.2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True)
+    assert "ready" in dev.stdout.readline()
+    report = json.loads(subprocess.run([str(prober), "--transport", "socketcan", "--address", interface, "--framing",
+                                        framing, "--node", "6", "--duration", "1.5", "--force", "2,0,0", "--enable"],
+                                       capture_output=True, text=True, timeout=30, check=True).stdout)
+    dev.communicate(timeout=10)
+    assert report["state_rate_hz"] > 900 and report["frames_bad"] == 0
+    assert report["mean_position_late_half_m"][0] == pytest.approx(2.0 / HAND_STIFFNESS_N_PER_M, abs=0.5e-3)
