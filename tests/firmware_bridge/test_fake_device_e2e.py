@@ -174,3 +174,65 @@ def test_same_exchange_on_real_socketcan_where_the_kernel_has_it(programs, frami
     dev.communicate(timeout=10)
     assert report["state_rate_hz"] > 900 and report["frames_bad"] == 0
     assert report["mean_position_late_half_m"][0] == pytest.approx(2.0 / HAND_STIFFNESS_N_PER_M, abs=0.5e-3)
+
+
+RIG = """
+name = "fake_pair"
+[rt]
+period_ns = 1_000_000
+policy = "ignore"
+[[devices]]
+name = "left"
+kind = "haptic_arm"
+transport = {{ kind = "loopback", address = "{left}", framing = "canfd", can_node_id = 1 }}
+max_force_n = 4.0
+device_watchdog_ms = 10.0
+[[devices]]
+name = "right"
+kind = "haptic_arm"
+transport = {{ kind = "loopback", address = "{right}", framing = "bulk", can_node_id = 2 }}
+"""
+
+
+def test_both_ends_read_one_rig_file(programs, tmp_path):
+    # haptic-rt and the fake device take the same [[devices]] entry: transport, node, framing,
+    # motor limit (4 N here) and device watchdog (10 ms) come from the rig file
+    fake, prober = programs
+    rig = tmp_path / "rig.toml"
+    rig.write_text(RIG.format(left=tmp_path / "left.sock", right=tmp_path / "right.sock"))
+    import subprocess
+    dev = subprocess.Popen([str(fake), "--rig", str(rig), "--device", "left", "--duration", "1.5"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert "framing canfd, node 1, watchdog 10 ms" in dev.stdout.readline()
+    result = subprocess.run([str(prober), "--rig", str(rig), "--device", "left", "--duration", "1.0",
+                             "--force", "6,0,0", "--enable"], capture_output=True, text=True, timeout=30)
+    dev.communicate(timeout=10)
+    import json
+    report = json.loads(result.stdout)
+    assert report["device"] == "left" and report["info"]["watchdog_ms"] == 10
+    assert report["info"]["max_force_n"] == pytest.approx(4.0)
+    # 6 N commanded, the device's 4 N motor limit applies: 4 N / 400 N/m = 10 mm, saturation reported
+    assert report["mean_position_late_half_m"][0] == pytest.approx(4.0 / HAND_STIFFNESS_N_PER_M, abs=0.5e-3)
+    assert report["status_seen"] & 0x10
+
+
+def test_scripted_stir_reaches_the_host_and_interactive_targets_move_the_handle(programs, tmp_path):
+    fake, prober = programs
+    sock = tmp_path / "bus.sock"
+    with FakeDevice(fake, sock, "--motion", "stir", duration=1.6):
+        report = probe(prober, sock, "--duration", 1.2)
+    # stir: 3 cm strokes at 1 Hz along x, followed by the handle through the hand's grip
+    assert 0.02 < report["max_abs_position_m"] < 0.035, report
+
+    import json
+    import subprocess
+    sock2 = tmp_path / "bus2.sock"
+    dev = subprocess.Popen([str(fake), "--address", str(sock2), "--motion", "interactive", "--duration", "1.6"],
+                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert "ready" in dev.stdout.readline()
+    dev.stdin.write("0 0.02 0\n")  # the operator moves the hand 2 cm along y
+    dev.stdin.flush()
+    report = json.loads(subprocess.run([str(prober), "--transport", "loopback", "--address", str(sock2),
+                                        "--duration", "1.0"], capture_output=True, text=True, timeout=30).stdout)
+    dev.communicate(timeout=10)
+    assert report["mean_position_late_half_m"][1] == pytest.approx(0.02, abs=1e-3)
