@@ -236,3 +236,19 @@ def test_scripted_stir_reaches_the_host_and_interactive_targets_move_the_handle(
                                         "--duration", "1.0"], capture_output=True, text=True, timeout=30).stdout)
     dev.communicate(timeout=10)
     assert report["mean_position_late_half_m"][1] == pytest.approx(0.02, abs=1e-3)
+
+
+def test_fake_device_usb_presentation_fails_clearly_without_uhid_or_functionfs(programs, tmp_path):
+    # Where the kernel has uhid / a FunctionFS gadget (the HIL guest) these start for real; here
+    # they must stop at once with the missing piece named, never hang or crash.
+    import pathlib
+    import subprocess
+    fake, _ = programs
+    if pathlib.Path("/dev/uhid").exists():
+        pytest.skip("this kernel has uhid: the hardware-in-the-loop suite exercises it")
+    hid = subprocess.run([str(fake), "--transport", "hid", "--duration", "0.2"], capture_output=True, text=True,
+                         timeout=10)
+    assert hid.returncode == 2 and "modprobe uhid" in hid.stderr
+    bulk = subprocess.run([str(fake), "--transport", "usb_bulk", "--address", str(tmp_path / "ffs"), "--duration",
+                           "0.2"], capture_output=True, text=True, timeout=10)
+    assert bulk.returncode == 2 and "usb_f_fs" in bulk.stderr and "dummy_hcd" in bulk.stderr
