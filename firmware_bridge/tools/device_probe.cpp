@@ -133,7 +133,9 @@ int run(const Options& o) {
       last_state_ns = state.host_receive_ns;
       faults_seen |= state.fault;
       status_seen |= state.status;
-      if ((state.status & HF_STATUS_WATCHDOG_TRIPPED) && !watchdog_seen_ns) watchdog_seen_ns = state.host_receive_ns;
+      // only a trip after the deliberate silence counts (a starved host may trip it earlier)
+      if ((state.status & HF_STATUS_WATCHDOG_TRIPPED) && !watchdog_seen_ns && silence_start_ns)
+        watchdog_seen_ns = state.host_receive_ns;
       if ((state.status & HF_STATUS_ESTOP_LATCHED) && !estop_seen_ns) estop_seen_ns = state.host_receive_ns;
       std::uint16_t echo = state.command_echo & 0xFF;
       if (echo != last_echo && sent_ns[echo] && state.host_receive_ns > sent_ns[echo]) {
