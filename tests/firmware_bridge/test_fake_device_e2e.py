@@ -258,3 +258,51 @@ def test_fake_device_usb_presentation_fails_clearly_without_uhid_or_functionfs(p
     bulk = subprocess.run([str(fake), "--transport", "usb_bulk", "--address", str(tmp_path / "ffs"), "--duration",
                            "0.2"], capture_output=True, text=True, timeout=10)
     assert bulk.returncode == 2 and "usb_f_fs" in bulk.stderr and "dummy_hcd" in bulk.stderr
+
+
+SCENE = """
+name = "fake_motion_only"
+duration_s = 2.0
+[domain]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.40, 0.30, 0.40]
+[fluid]
+rest_density_kg_m3 = 1000.0
+particle_spacing_m = 0.02
+viscosity_pa_s = 0.2
+speed_of_sound_m_s = 4.0
+[[fluid.blocks]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.40, 0.30, 0.08]
+[[devices]]
+name = "hand"
+source = "scripted"
+start_position_m = [0.0, 0.0, 0.0]
+[[devices.motion]]
+kind = "oscillate"
+axis = [0.0, 1.0, 0.0]
+amplitude_m = 0.02
+frequency_hz = 1.0
+"""
+
+
+def test_a_scene_files_scripted_device_motion_drives_the_hand(programs, tmp_path):
+    # the same scripted motion the simulator's batch runs use (config::evaluate_motion): here a
+    # 2 cm, 1 Hz oscillation along y, which the host sees in the handle's pose
+    fake, prober = programs
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE)
+    sock = tmp_path / "bus.sock"
+    with FakeDevice(fake, sock, "--motion", f"scene:{scene}:hand", *RELAXED_WATCHDOG, duration=1.6):
+        report = probe(prober, sock, "--duration", 1.2)
+    assert 0.015 < report["max_abs_position_m"] < 0.025, report
+
+
+def test_unknown_scene_device_is_named(programs, tmp_path):
+    import subprocess
+    fake, _ = programs
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE)
+    result = subprocess.run([str(fake), "--address", str(tmp_path / "b.sock"), "--motion", f"scene:{scene}:left"],
+                            capture_output=True, text=True, timeout=10)
+    assert result.returncode == 2 and "no device named 'left'" in result.stderr
