@@ -1,5 +1,7 @@
 #include "hapfluid/rt/device_seam.hpp"
 
+#include "hapfluid/device/open_device.hpp"
+#include "hapfluid/device/transport.hpp"
 #include "hapfluid/rt/simulated_device.hpp"
 
 namespace hapfluid::rt {
@@ -7,11 +9,14 @@ namespace hapfluid::rt {
 std::unique_ptr<device::Device> open_rig_device(const config::RigDevice& device, DeviceBackend backend,
                                                 std::string& error) {
   if (backend == DeviceBackend::simulated) return std::make_unique<SimulatedDevice>(device.name);
-  // MERGE SEAM: replace with `return device::open_device(device);` from firmware_bridge.
-  error = "device \"" + device.name + "\": transport " + config::to_string(device.transport.kind) + " \"" +
-          device.transport.address +
-          "\" cannot be opened: this build has no firmware_bridge drivers; run with --simulated-devices";
-  return nullptr;
+  // The real driver for the rig's transport (CAN, HID, USB bulk, loopback). Opening may block
+  // for the device's handshake: this runs once at start-up, before the loop.
+  try {
+    return device::open_device(device);
+  } catch (const std::exception& e) {
+    error = e.what();  // names the device, its transport and the fix
+    return nullptr;
+  }
 }
 
 }  // namespace hapfluid::rt

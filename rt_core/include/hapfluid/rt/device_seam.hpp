@@ -1,5 +1,6 @@
-// The one place that maps a rig device to a Device object. At merge, the real
-// firmware_bridge factory (open_device(const config::RigDevice&)) goes in here.
+// The one place that maps a rig device to a Device object: firmware_bridge's driver for the rig's
+// transport, or (--simulated-devices, for loop tests without a device process) an in-process
+// simulated handle.
 #pragma once
 
 #include <memory>
