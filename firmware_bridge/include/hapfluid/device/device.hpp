@@ -12,6 +12,7 @@ struct DeviceState {
   std::uint64_t host_receive_ns = 0;  // CLOCK_MONOTONIC when the newest frame arrived
   std::uint32_t device_time_us = 0;   // the device's own clock, wraps
   std::uint16_t sequence = 0;
+  std::uint16_t command_echo = 0;     // sequence (low 8 bits) of the newest command the device applied
   double position_m[3] = {0, 0, 0};
   double orientation[4] = {1, 0, 0, 0};
   double linear_velocity_m_s[3] = {0, 0, 0};
@@ -26,6 +27,8 @@ struct DeviceCommand {
   double torque_nm[3] = {0, 0, 0};
   bool enable = false;                // false: the device must hold zero motor torque
   bool estop = false;                 // latched emergency stop request
+  bool clear_faults = false;          // explicit recovery: clears latched device faults, only
+                                      // honoured together with enable = false
 };
 
 struct DeviceHealth {
@@ -33,6 +36,7 @@ struct DeviceHealth {
   std::uint64_t frames_bad = 0;       // CRC, length, version or range errors
   std::uint64_t sequence_gaps = 0;    // frames lost between valid ones
   std::uint64_t commands_sent = 0;
+  std::uint16_t last_command_sequence = 0;  // sequence number the newest command went out with
   std::uint64_t send_errors = 0;
   std::uint64_t last_valid_ns = 0;    // CLOCK_MONOTONIC of the newest valid frame
   std::uint32_t transport_errors = 0; // bit set: bus-off, error-passive, disconnected, ...

@@ -1,0 +1,386 @@
+// haptic-fake-device: the firmware of a protocol-v1 haptic arm (or a SpaceMouse), emulated at
+// 1 kHz on a real transport, with a scripted or interactive hand, its own command watchdog,
+// fault injection and a CSV log of what it received and what the hand felt. See --help.
+#include <linux/can.h>
+#include <linux/can/error.h>
+#include <signal.h>
+#include <time.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "fake_firmware.hpp"
+#include "hand.hpp"
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/device/open_device.hpp"
+
+using namespace hapfluid;
+
+namespace {
+
+volatile sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+const char* kUsage = R"(usage: haptic-fake-device [options]
+  --rig FILE --device NAME     take transport, node, watchdog and limits from a rig file
+  --transport loopback|socketcan   (default loopback)
+  --address PATH|IFACE         loopback socket path or CAN interface
+  --framing can|canfd|hid|bulk loopback wire format (socketcan: can or canfd)
+  --node N                     CAN node id 1..15 (default 1)
+  --kind haptic_arm|spacemouse (default haptic_arm)
+  --motion NAME                hold|stir|pour|spin|tilt|interactive|scene:FILE:DEVICE (default hold)
+  --duration S                 run time in seconds; 0 = until SIGINT/SIGTERM (default 0)
+  --rate-hz HZ                 state rate (default 1000)
+  --watchdog-ms MS             command watchdog (default 20)
+  --max-force-n N --max-torque-nm T   motor limits (default 12, 0.8)
+  --log FILE.csv               per-tick log: command received, force applied, hand force, pose
+  --summary FILE.json          statistics at exit (also printed on stdout)
+fault injection:
+  --drop-probability P         drop each outgoing STATE with probability P
+  --corrupt-every N            corrupt the CRC of every Nth outgoing STATE
+  --delay-ms MS                delay every outgoing message by MS
+  --silent-after S             send nothing after S seconds (still receives)
+  --stop-answering-after S     stop reading commands after S seconds (still sends state)
+  --bus-off-at S [--bus-off-ms MS]   CAN: report bus-off at S, silent for MS (default 200), restart
+  --seed N                     random seed for --drop-probability (default 1)
+)";
+
+struct Options {
+  config::RigDevice device;
+  std::string kind = "haptic_arm";
+  std::string motion = "hold";
+  double duration_s = 0, rate_hz = 1000;
+  std::string log_path, summary_path;
+  double drop_probability = 0;
+  int corrupt_every = 0;
+  double delay_ms = 0;
+  double silent_after_s = -1, stop_answering_after_s = -1, bus_off_at_s = -1, bus_off_ms = 200;
+  unsigned seed = 1;
+};
+
+Options parse(int argc, char** argv) {
+  Options o;
+  o.device.name = "fake";
+  o.device.transport.kind = config::TransportKind::loopback;
+  std::string rig_file, rig_device;
+  bool watchdog_given = false;
+  for (int i = 1; i < argc; ++i) {
+    std::string a = argv[i];
+    if (a == "--help" || a == "-h") { std::fputs(kUsage, stdout); std::exit(0); }
+    if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value (see --help)");
+    std::string v = argv[++i];
+    auto number = [&](double lo) {
+      char* end = nullptr;
+      double d = std::strtod(v.c_str(), &end);
+      if (end == v.c_str() || *end || !std::isfinite(d) || d < lo)
+        throw std::invalid_argument(a + " " + v + ": expected a number >= " + std::to_string(lo));
+      return d;
+    };
+    if (a == "--rig") rig_file = v;
+    else if (a == "--device") rig_device = v;
+    else if (a == "--transport") {
+      if (v == "loopback") o.device.transport.kind = config::TransportKind::loopback;
+      else if (v == "socketcan") o.device.transport.kind = config::TransportKind::socketcan;
+      else throw std::invalid_argument("--transport " + v + ": the fake device speaks loopback or socketcan here "
+                                       "(hid and usb_bulk are presented through uhid/FunctionFS in HIL tests)");
+    } else if (a == "--address") o.device.transport.address = v;
+    else if (a == "--framing") { o.device.transport.framing = v; o.device.transport.can_fd = v == "canfd"; }
+    else if (a == "--node") o.device.transport.can_node_id = static_cast<std::uint32_t>(number(1));
+    else if (a == "--kind") o.kind = v;
+    else if (a == "--motion") o.motion = v;
+    else if (a == "--duration") o.duration_s = number(0);
+    else if (a == "--rate-hz") o.rate_hz = number(1);
+    else if (a == "--watchdog-ms") { o.device.watchdogs.device_watchdog_ms = number(1); watchdog_given = true; }
+    else if (a == "--max-force-n") o.device.limits.max_force_n = number(0);
+    else if (a == "--max-torque-nm") o.device.limits.max_torque_nm = number(0);
+    else if (a == "--log") o.log_path = v;
+    else if (a == "--summary") o.summary_path = v;
+    else if (a == "--drop-probability") o.drop_probability = number(0);
+    else if (a == "--corrupt-every") o.corrupt_every = static_cast<int>(number(0));
+    else if (a == "--delay-ms") o.delay_ms = number(0);
+    else if (a == "--silent-after") o.silent_after_s = number(0);
+    else if (a == "--stop-answering-after") o.stop_answering_after_s = number(0);
+    else if (a == "--bus-off-at") o.bus_off_at_s = number(0);
+    else if (a == "--bus-off-ms") o.bus_off_ms = number(0);
+    else if (a == "--seed") o.seed = static_cast<unsigned>(number(0));
+    else throw std::invalid_argument("unknown option " + a + " (see --help)");
+  }
+  if (!rig_file.empty()) {
+    config::Rig rig = config::load_rig(rig_file);
+    const config::RigDevice* d = rig.find_device(rig_device);
+    if (!d) throw std::invalid_argument(rig_file + ": no device named '" + rig_device + "' (--device)");
+    double watchdog = o.device.watchdogs.device_watchdog_ms;
+    o.device = *d;
+    if (watchdog_given) o.device.watchdogs.device_watchdog_ms = watchdog;
+    o.kind = d->kind == config::DeviceKind::spacemouse ? "spacemouse" : "haptic_arm";
+  }
+  if (o.device.transport.address.empty()) throw std::invalid_argument("--address (or --rig/--device) is required");
+  if (o.device.transport.kind == config::TransportKind::socketcan && o.device.transport.framing == "hid")
+    throw std::invalid_argument("--framing hid makes no sense on socketcan");
+  if (o.kind != "haptic_arm" && o.kind != "spacemouse")
+    throw std::invalid_argument("--kind " + o.kind + ": choose haptic_arm or spacemouse");
+  if (o.drop_probability > 1) throw std::invalid_argument("--drop-probability must be within 0..1");
+  return o;
+}
+
+std::uint64_t now_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+}
+
+// Outgoing messages held back by --delay-ms.
+struct DelayQueue {
+  static constexpr int kSize = 4096;
+  hf_message messages[kSize];
+  double due_s[kSize];
+  int head = 0, tail = 0;
+  bool push(const hf_message& m, double due) {
+    if (head - tail >= kSize) return false;
+    messages[head % kSize] = m;
+    due_s[head % kSize] = due;
+    ++head;
+    return true;
+  }
+};
+
+void send_spacemouse_reports(device::Transport& transport, const config::PoseTwist& hand) {
+  // 3Dconnexion rate reports: deflection proportional to the hand's velocity (0.1 m/s and
+  // 1 rad/s at full deflection, +-350 counts), report 1 translation, report 2 rotation.
+  auto counts = [](double v, double full) {
+    double c = std::round(v / full * 350.0);
+    return static_cast<std::int16_t>(c > 350 ? 350 : c < -350 ? -350 : c);
+  };
+  const double t[3] = {hand.linear_velocity_m_s.x, hand.linear_velocity_m_s.y, hand.linear_velocity_m_s.z};
+  const double r[3] = {hand.angular_velocity_rad_s.x, hand.angular_velocity_rad_s.y, hand.angular_velocity_rad_s.z};
+  for (int id = 1; id <= 2; ++id) {
+    device::WireFrame f;
+    f.length = 7;
+    f.data[0] = static_cast<std::uint8_t>(id);
+    for (int i = 0; i < 3; ++i) {
+      std::int16_t c = counts(id == 1 ? t[i] : r[i], id == 1 ? 0.1 : 1.0);
+      f.data[1 + 2 * i] = static_cast<std::uint8_t>(c);
+      f.data[2 + 2 * i] = static_cast<std::uint8_t>(static_cast<std::uint16_t>(c) >> 8);
+    }
+    transport.send(f);
+  }
+}
+
+int run(const Options& o) {
+  const config::RigDevice& d = o.device;
+  auto link = device::open_link(d.transport, device::Side::device);
+  fake::DeviceModel model;
+  model.watchdog_ms = static_cast<int>(std::lround(d.watchdogs.device_watchdog_ms));
+  model.max_force_n = d.limits.max_force_n;
+  model.max_torque_nm = d.limits.max_torque_nm;
+  model.handle_damping_n_s_per_m = d.limits.device_damping_n_s_per_m;
+
+  config::Pose start;
+  config::ScriptedMotion motion;
+  bool interactive = o.motion == "interactive";
+  if (o.motion.rfind("scene:", 0) == 0) {
+    std::string rest = o.motion.substr(6);
+    auto colon = rest.rfind(':');
+    if (colon == std::string::npos) throw std::invalid_argument("--motion scene:FILE:DEVICE needs the device name");
+    motion = fake::scene_motion(rest.substr(0, colon), rest.substr(colon + 1));
+  } else {
+    motion = fake::builtin_motion(interactive ? "hold" : o.motion, start);
+  }
+  fake::Hand hand(motion, interactive);
+  fake::FakeFirmware firmware(model, motion.start, link->sequence_modulus());
+  const bool spacemouse = o.kind == "spacemouse";
+
+  FILE* log = nullptr;
+  if (!o.log_path.empty()) {
+    log = std::fopen(o.log_path.c_str(), "w");
+    if (!log) throw std::runtime_error("cannot write the log " + o.log_path + ": " + std::strerror(errno));
+    static char buffer[1 << 16];
+    std::setvbuf(log, buffer, _IOFBF, sizeof buffer);
+    std::fputs("t_s,cmd_received,cmd_seq,cmd_fx,cmd_fy,cmd_fz,cmd_tx,cmd_ty,cmd_tz,cmd_flags,"
+               "applied_fx,applied_fy,applied_fz,applied_tx,applied_ty,applied_tz,hand_fx,hand_fy,hand_fz,"
+               "px,py,pz,qw,qx,qy,qz,status,faults\n", log);
+  }
+
+  std::printf("haptic-fake-device: ready on %s (framing %s, node %u, watchdog %d ms)\n",
+              link->transport().describe().c_str(), device::to_string(link->framing()), d.transport.can_node_id,
+              model.watchdog_ms);
+  std::fflush(stdout);
+
+  std::mt19937 rng(o.seed);
+  std::uniform_real_distribution<double> uniform(0, 1);
+  static DelayQueue delayed;
+  const std::uint64_t period_ns = static_cast<std::uint64_t>(1e9 / o.rate_hz);
+  const double dt = period_ns * 1e-9;
+  const std::uint64_t t0 = now_ns();
+  std::uint64_t wake = t0;
+  std::uint64_t ticks = 0, states_sent = 0, states_dropped = 0, states_corrupted = 0, late_ticks = 0;
+  std::uint16_t state_seq = 0, fault_seq = 0, heartbeat_seq = 0, info_seq = 0;
+  bool bus_off_reported = false, bus_restarted = false;
+  double next_heartbeat_s = 0, next_fault_s = 0;
+  bool stopped_answering_logged = false;
+
+  auto transmit = [&](hf_message m, double t) {
+    if (o.silent_after_s >= 0 && t >= o.silent_after_s) return;
+    if (o.bus_off_at_s >= 0 && t >= o.bus_off_at_s && t < o.bus_off_at_s + o.bus_off_ms * 1e-3) return;
+    if (o.delay_ms > 0) { delayed.push(m, t + o.delay_ms * 1e-3); return; }
+    link->send(m);
+  };
+
+  // A real device's MCU never misses a tick. The emulator shares a CPU with everything else, so
+  // when it wakes late it runs the missed ticks back to back on the device timeline (states keep
+  // their 1 ms spacing in device time); beyond 50 ms behind it re-phases and counts the loss.
+  const std::uint64_t catch_up_limit_ns = 50'000'000;
+  while (!g_stop) {
+    wake += period_ns;
+    timespec ts{static_cast<time_t>(wake / 1'000'000'000ull), static_cast<long>(wake % 1'000'000'000ull)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    const std::uint64_t now = now_ns();
+    if (now > wake + catch_up_limit_ns) {
+      late_ticks += (now - wake) / period_ns;
+      wake = now;
+    }
+    const double t = (wake - t0) * 1e-9;
+    if (o.duration_s > 0 && t >= o.duration_s) break;
+    ++ticks;
+
+    // 1. receive (unless the firmware hangs or the controller is bus-off)
+    firmware.begin_tick();
+    const bool in_bus_off = o.bus_off_at_s >= 0 && t >= o.bus_off_at_s && t < o.bus_off_at_s + o.bus_off_ms * 1e-3;
+    const bool answering = o.stop_answering_after_s < 0 || t < o.stop_answering_after_s;
+    if (!answering && !stopped_answering_logged) {
+      std::fprintf(stderr, "haptic-fake-device: fault injection: stopped answering at t=%.3f s\n", t);
+      stopped_answering_logged = true;
+    }
+    bool info_requested = false;
+    if (answering && !in_bus_off) {
+      hf_message m;
+      while (link->receive(m) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
+    }
+    // 2. bus-off injection: error frames exactly as a CAN controller reports them
+    if (in_bus_off && !bus_off_reported && link->framing() != device::Framing::hid &&
+        link->framing() != device::Framing::bulk) {
+      device::WireFrame e;
+      e.can_id = CAN_ERR_FLAG | CAN_ERR_BUSOFF;
+      e.length = 8;
+      link->transport().send(e);
+      bus_off_reported = true;
+      std::fprintf(stderr, "haptic-fake-device: fault injection: bus-off at t=%.3f s\n", t);
+    }
+    if (bus_off_reported && !in_bus_off && !bus_restarted) {
+      device::WireFrame e;
+      e.can_id = CAN_ERR_FLAG | CAN_ERR_RESTARTED;
+      e.length = 8;
+      link->transport().send(e);
+      bus_restarted = true;
+    }
+    // 3. physics and watchdog
+    const config::PoseTwist target = hand.target(t);
+    firmware.step(t, dt, target);
+    if (firmware.watchdog_trip_s() == t)
+      std::fprintf(stderr, "haptic-fake-device: watchdog: no valid command for %.1f ms, motors off at t=%.3f s\n",
+                   (t - firmware.last_command_s()) * 1e3, t);
+
+    // 4. transmit
+    if (spacemouse) {
+      if (!(o.silent_after_s >= 0 && t >= o.silent_after_s)) send_spacemouse_reports(link->transport(), target);
+    } else {
+      hf_message m;
+      std::memset(&m, 0, sizeof m);
+      if (info_requested) {
+        m.type = HF_MSG_INFO;
+        m.seq = info_seq++;
+        m.body.info = firmware.info();
+        transmit(m, t);
+      }
+      if (firmware.take_new_fault() || (firmware.faults() && t >= next_fault_s)) {
+        m.type = HF_MSG_FAULT;
+        m.seq = fault_seq++;
+        m.body.fault = firmware.fault_report(t);
+        transmit(m, t);
+        next_fault_s = t + 0.1;
+      }
+      if (t >= next_heartbeat_s) {
+        m.type = HF_MSG_DEVICE_HEARTBEAT;
+        m.seq = heartbeat_seq++;
+        m.body.heartbeat.uptime_ms = static_cast<std::uint32_t>(t * 1e3);
+        m.body.heartbeat.status = firmware.status();
+        transmit(m, t);
+        next_heartbeat_s = t + 0.1;
+      }
+      m.type = HF_MSG_STATE;
+      m.seq = state_seq++;
+      m.body.state = firmware.state(static_cast<std::uint32_t>(static_cast<std::uint64_t>(t * 1e6)));
+      if (o.drop_probability > 0 && uniform(rng) < o.drop_probability) {
+        ++states_dropped;
+      } else {
+        if (o.corrupt_every > 0 && m.seq % o.corrupt_every == 0) {
+          link->corrupt_next(1);
+          ++states_corrupted;
+        }
+        transmit(m, t);
+        ++states_sent;
+      }
+      while (delayed.tail < delayed.head && delayed.due_s[delayed.tail % DelayQueue::kSize] <= t) {
+        link->send(delayed.messages[delayed.tail % DelayQueue::kSize]);
+        ++delayed.tail;
+      }
+    }
+    // 5. log
+    if (log) {
+      const fake::TickRecord& r = firmware.record();
+      hf_state s = firmware.state(0);
+      std::fprintf(log, "%.6f,%d,%u,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%u,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.4f,%.4f,%.4f,"
+                        "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%u,%u\n",
+                   t, r.command_received ? 1 : 0, r.command_seq, r.command.force_n[0], r.command.force_n[1],
+                   r.command.force_n[2], r.command.torque_nm[0], r.command.torque_nm[1], r.command.torque_nm[2],
+                   r.command.flags, r.applied_force_n[0], r.applied_force_n[1], r.applied_force_n[2],
+                   r.applied_torque_nm[0], r.applied_torque_nm[1], r.applied_torque_nm[2], r.hand_force_n[0],
+                   r.hand_force_n[1], r.hand_force_n[2], s.position_m[0], s.position_m[1], s.position_m[2],
+                   s.orientation[0], s.orientation[1], s.orientation[2], s.orientation[3], r.status, r.faults);
+    }
+  }
+  if (log) std::fclose(log);
+
+  const double reaction_ms = firmware.watchdog_trip_s() >= 0
+                                 ? (firmware.watchdog_trip_s() - firmware.last_command_s()) * 1e3 : -1;
+  char summary[1024];
+  std::snprintf(summary, sizeof summary,
+                "{\"ticks\": %llu, \"ticks_lost\": %llu, \"states_sent\": %llu, \"states_dropped\": %llu, "
+                "\"states_corrupted\": %llu, \"commands_applied\": %llu, \"command_sequence_gaps\": %u, "
+                "\"frames_bad\": %llu, \"faults\": %u, \"watchdog_trip_s\": %.6f, \"last_command_s\": %.6f, "
+                "\"watchdog_reaction_ms\": %.3f}\n",
+                static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(late_ticks),
+                static_cast<unsigned long long>(states_sent), static_cast<unsigned long long>(states_dropped),
+                static_cast<unsigned long long>(states_corrupted),
+                static_cast<unsigned long long>(firmware.commands_applied()), firmware.command_sequence_gaps(),
+                static_cast<unsigned long long>(link->frames_bad()), firmware.faults(), firmware.watchdog_trip_s(),
+                firmware.last_command_s(), reaction_ms);
+  std::fputs(summary, stdout);
+  if (!o.summary_path.empty()) {
+    FILE* f = std::fopen(o.summary_path.c_str(), "w");
+    if (!f) throw std::runtime_error("cannot write the summary " + o.summary_path);
+    std::fputs(summary, f);
+    std::fclose(f);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+  try {
+    return run(parse(argc, argv));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "haptic-fake-device: %s\n", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,49 @@
+// Driver for a 6-DoF haptic arm speaking protocol v1 on any message link (CAN, CAN FD, HID,
+// bulk, loopback). poll() drains every pending message and keeps the newest state; send()
+// encodes one COMMAND (and a host heartbeat every 100 ms). Neither allocates nor blocks.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "hapfluid/device/device.hpp"
+#include "hapfluid/device/message_link.hpp"
+
+namespace hapfluid::device {
+
+class HapticArm final : public Device {
+ public:
+  // Sends INFO_REQUEST and waits up to `handshake_ms` for INFO (open time, not real time). A
+  // device that does not answer is still returned: health().connected stays false until it talks.
+  HapticArm(std::string name, std::unique_ptr<MessageLink> link, int handshake_ms = 200);
+
+  bool poll(DeviceState& out) override;
+  bool send(const DeviceCommand& command) override;
+  DeviceHealth health() const override;
+  const char* name() const override { return name_.c_str(); }
+
+  bool has_info() const { return has_info_; }
+  const hf_info& info() const { return info_; }
+  std::uint32_t device_faults() const { return faults_; }
+  MessageLink& link() { return *link_; }
+
+ private:
+  void handle(const hf_message& message, std::uint64_t now_ns, bool& updated);
+
+  std::string name_;
+  std::unique_ptr<MessageLink> link_;
+  DeviceState latest_{};
+  DeviceHealth health_{};
+  hf_seq_tracker state_seq_{};
+  hf_info info_{};
+  bool has_info_ = false;
+  std::uint32_t faults_ = 0;
+  std::uint16_t command_seq_ = 0;
+  std::uint16_t heartbeat_seq_ = 0;
+  std::uint16_t estop_seq_ = 0;
+  std::uint64_t next_heartbeat_ns_ = 0;
+};
+
+std::uint64_t monotonic_ns();
+
+}  // namespace hapfluid::device

@@ -1,0 +1,19 @@
+// The factory the 1 kHz loop calls once per rig device at start-up (not real-time: it may block
+// for the device handshake, allocate and throw TransportError with a message naming the fix).
+#pragma once
+
+#include <memory>
+
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/device/device.hpp"
+#include "hapfluid/device/message_link.hpp"
+
+namespace hapfluid::device {
+
+std::unique_ptr<Device> open_device(const config::RigDevice& rig_device);
+
+// The transport and framing a rig device's [transport] table asks for, on the given side
+// (the fake device opens the device side of the same description).
+std::unique_ptr<MessageLink> open_link(const config::Transport& transport, Side side);
+
+}  // namespace hapfluid::device

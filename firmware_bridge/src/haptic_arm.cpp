@@ -1,0 +1,152 @@
+// Host-side driver of a protocol-v1 haptic arm.
+#include "hapfluid/device/haptic_arm.hpp"
+
+#include <time.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace hapfluid::device {
+
+std::uint64_t monotonic_ns() {
+  timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+}
+
+namespace {
+constexpr std::uint64_t kHeartbeatPeriodNs = 100'000'000;  // protocol.md: heartbeats every 100 ms
+}
+
+HapticArm::HapticArm(std::string name, std::unique_ptr<MessageLink> link, int handshake_ms)
+    : name_(std::move(name)), link_(std::move(link)) {
+  hf_message request;
+  std::memset(&request, 0, sizeof request);
+  request.type = HF_MSG_INFO_REQUEST;
+  const std::uint64_t deadline = monotonic_ns() + static_cast<std::uint64_t>(handshake_ms) * 1'000'000ull;
+  std::uint64_t next_request = 0;
+  DeviceState scratch;
+  while (!has_info_ && monotonic_ns() < deadline) {
+    if (monotonic_ns() >= next_request) {  // requests may be lost: repeat every 20 ms
+      link_->send(request);
+      ++request.seq;
+      next_request = monotonic_ns() + 20'000'000;
+    }
+    wait_readable(link_->transport(), 5);
+    poll(scratch);
+  }
+}
+
+void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated) {
+  switch (m.type) {
+    case HF_MSG_STATE: {
+      if (!hf_seq_accept(&state_seq_, m.seq, link_->sequence_modulus())) return;  // late or repeated
+      const hf_state& s = m.body.state;
+      latest_.host_receive_ns = now_ns;
+      latest_.device_time_us = s.device_time_us;
+      latest_.sequence = m.seq;
+      latest_.command_echo = s.command_echo;
+      for (int i = 0; i < 3; ++i) {
+        latest_.position_m[i] = s.position_m[i];
+        latest_.linear_velocity_m_s[i] = s.linear_velocity_m_s[i];
+        latest_.angular_velocity_rad_s[i] = s.angular_velocity_rad_s[i];
+      }
+      for (int i = 0; i < 4; ++i) latest_.orientation[i] = s.orientation[i];
+      latest_.buttons = s.buttons;
+      latest_.status = s.status;
+      // classic CAN has no fault byte in STATE: the FAULT messages keep faults_ current
+      if (link_->framing() != Framing::can) faults_ = s.fault;
+      if (!(s.status & HF_STATUS_FAULTED)) faults_ = 0;
+      latest_.fault = faults_;
+      health_.frames_ok++;
+      health_.last_valid_ns = now_ns;
+      health_.connected = true;
+      updated = true;
+      return;
+    }
+    case HF_MSG_FAULT:
+      faults_ = m.body.fault.faults;
+      latest_.fault = faults_;
+      health_.frames_ok++;
+      return;
+    case HF_MSG_DEVICE_HEARTBEAT:
+      health_.frames_ok++;
+      health_.connected = true;
+      return;
+    case HF_MSG_INFO:
+      info_ = m.body.info;
+      has_info_ = true;
+      health_.frames_ok++;
+      return;
+    default:
+      return;  // host->device messages relayed on a shared bus: not ours to handle
+  }
+}
+
+bool HapticArm::poll(DeviceState& out) {
+  bool updated = false;
+  hf_message m;
+  std::uint64_t now = 0;
+  while (link_->receive(m) == Io::ok) {
+    if (!now) now = monotonic_ns();  // one clock read per poll: all frames of a tick arrived together
+    handle(m, now, updated);
+  }
+  if (updated) out = latest_;
+  return updated;
+}
+
+bool HapticArm::send(const DeviceCommand& command) {
+  hf_message m;
+  std::memset(&m, 0, sizeof m);
+  m.type = HF_MSG_COMMAND;
+  m.seq = command_seq_;
+  hf_command& c = m.body.command;
+  for (int i = 0; i < 3; ++i) {
+    c.force_n[i] = command.force_n[i];
+    c.torque_nm[i] = command.torque_nm[i];
+  }
+  c.flags = static_cast<std::uint8_t>((command.enable ? HF_CMD_ENABLE : 0) | (command.estop ? HF_CMD_ESTOP : 0) |
+                                      (command.clear_faults ? HF_CMD_CLEAR_FAULTS : 0));
+  bool ok = link_->send(m);
+  if (!ok && link_->last_encode_result() != HF_OK) {
+    // Not representable (non-finite or beyond full scale): the safety layer failed upstream.
+    // Send a disabled zero wrench under this sequence so the motors never keep a stale force.
+    std::memset(&c, 0, sizeof c);
+    c.flags = command.estop ? HF_CMD_ESTOP : 0;
+    link_->send(m);
+  }
+  if (command.estop) {
+    hf_message e;
+    std::memset(&e, 0, sizeof e);
+    e.type = HF_MSG_ESTOP;
+    e.seq = estop_seq_++;
+    e.body.estop.reason = 1;  // host safety layer
+    link_->send(e);
+  }
+  health_.last_command_sequence = command_seq_++;
+  if (ok) health_.commands_sent++;
+  else health_.send_errors++;
+
+  const std::uint64_t now = monotonic_ns();
+  if (now >= next_heartbeat_ns_) {
+    hf_message h;
+    std::memset(&h, 0, sizeof h);
+    h.type = HF_MSG_HOST_HEARTBEAT;
+    h.seq = heartbeat_seq_++;
+    h.body.heartbeat.uptime_ms = static_cast<std::uint32_t>(now / 1'000'000ull);
+    link_->send(h);
+    next_heartbeat_ns_ = now + kHeartbeatPeriodNs;
+  }
+  return ok;
+}
+
+DeviceHealth HapticArm::health() const {
+  DeviceHealth h = health_;
+  h.frames_bad = link_->frames_bad();
+  h.sequence_gaps = state_seq_.gaps;
+  h.transport_errors = link_->transport().error_flags();
+  if (h.transport_errors & (kDisconnected | kBusOff)) h.connected = false;
+  return h;
+}
+
+}  // namespace hapfluid::device

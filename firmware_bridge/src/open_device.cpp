@@ -1,0 +1,90 @@
+// Rig file [transport] -> transport, framing and driver.
+#include "hapfluid/device/open_device.hpp"
+
+#include <poll.h>
+#include <time.h>
+
+#include "hapfluid/device/haptic_arm.hpp"
+#include "hapfluid/device/loopback.hpp"
+#include "hapfluid/device/socketcan.hpp"
+#include "hapfluid/device/spacemouse.hpp"
+#include "hapfluid/device/usb_transports.hpp"
+
+namespace hapfluid::device {
+
+bool wait_readable(Transport& transport, int timeout_ms) {
+  transport.service();
+  int fd = transport.poll_fd();
+  if (fd < 0) {  // hidapi/libusb expose no single fd: nap one millisecond, let the caller poll
+    timespec nap{0, 1'000'000};
+    nanosleep(&nap, nullptr);
+    return true;
+  }
+  pollfd p{fd, POLLIN, 0};
+  return ::poll(&p, 1, timeout_ms) > 0;
+}
+
+namespace {
+
+LoopbackFormat loopback_format(Framing framing) {
+  switch (framing) {
+    case Framing::hid: return LoopbackFormat::hid;
+    case Framing::bulk: return LoopbackFormat::bulk;
+    default: return LoopbackFormat::can;
+  }
+}
+
+std::unique_ptr<Transport> open_transport(const config::Transport& t, Framing framing, Side side) {
+  switch (t.kind) {
+    case config::TransportKind::loopback:
+      return std::make_unique<LoopbackTransport>(t.address, side == Side::device ? LoopbackRole::bus : LoopbackRole::peer,
+                                                 loopback_format(framing));
+    case config::TransportKind::socketcan:
+      return std::make_unique<SocketCanTransport>(t.address, t.can_fd, t.can_node_id);
+    case config::TransportKind::hid:
+      if (side == Side::device)
+        throw TransportError("the fake device presents itself over HID through uhid (hardware-in-the-loop "
+                             "tests); here use transport.kind = \"loopback\" with framing = \"hid\"");
+      return open_hidapi_transport(t.address);
+    case config::TransportKind::usb_bulk:
+      if (side == Side::device)
+        throw TransportError("the fake device presents itself over USB bulk through FunctionFS "
+                             "(hardware-in-the-loop tests); here use transport.kind = \"loopback\" with framing = \"bulk\"");
+      return open_libusb_transport(t.address);
+  }
+  throw TransportError("unknown transport kind");
+}
+
+Framing framing_of(const config::Transport& t) {
+  switch (t.kind) {
+    case config::TransportKind::loopback: return parse_framing(t.framing.c_str());
+    case config::TransportKind::socketcan: return t.can_fd ? Framing::canfd : Framing::can;
+    case config::TransportKind::hid: return Framing::hid;
+    case config::TransportKind::usb_bulk: return Framing::bulk;
+  }
+  return Framing::can;
+}
+
+}  // namespace
+
+std::unique_ptr<MessageLink> open_link(const config::Transport& t, Side side) {
+  Framing framing = framing_of(t);
+  return std::make_unique<MessageLink>(open_transport(t, framing, side), framing,
+                                       static_cast<std::uint8_t>(t.can_node_id), side);
+}
+
+std::unique_ptr<Device> open_device(const config::RigDevice& d) {
+  try {
+    if (d.kind == config::DeviceKind::spacemouse) {
+      if (framing_of(d.transport) != Framing::hid)
+        throw TransportError("a SpaceMouse speaks USB HID: use transport.kind = \"hid\" (or loopback with framing = \"hid\")");
+      return std::make_unique<SpaceMouse>(d.name, open_transport(d.transport, Framing::hid, Side::host));
+    }
+    return std::make_unique<HapticArm>(d.name, open_link(d.transport, Side::host));
+  } catch (const TransportError& e) {
+    throw TransportError("device '" + d.name + "' (" + config::to_string(d.transport.kind) + " " +
+                         d.transport.address + "): " + e.what());
+  }
+}
+
+}  // namespace hapfluid::device
