@@ -15,9 +15,13 @@
 #include <string>
 
 #include "fake_firmware.hpp"
+#include "functionfs_transport.hpp"
 #include "hand.hpp"
 #include "hapfluid/config/rig.hpp"
+#include "hapfluid/device/hid_descriptors.hpp"
 #include "hapfluid/device/open_device.hpp"
+#include "hapfluid/device/usb_transports.hpp"
+#include "uhid_transport.hpp"
 
 using namespace hapfluid;
 
@@ -28,8 +32,10 @@ void on_signal(int) { g_stop = 1; }
 
 const char* kUsage = R"(usage: haptic-fake-device [options]
   --rig FILE --device NAME     take transport, node, watchdog and limits from a rig file
-  --transport loopback|socketcan   (default loopback)
-  --address PATH|IFACE         loopback socket path or CAN interface
+  --transport loopback|socketcan|hid|usb_bulk   (default loopback)
+  --address A                  loopback socket path | CAN interface | hid: VID:PID presented through
+                               /dev/uhid (default 1209:4846, SpaceMouse 256f:c635) | usb_bulk: the
+                               directory where the gadget's FunctionFS instance is mounted
   --framing can|canfd|hid|bulk loopback wire format (socketcan: can or canfd)
   --node N                     CAN node id 1..15 (default 1)
   --kind haptic_arm|spacemouse (default haptic_arm)
@@ -86,8 +92,9 @@ Options parse(int argc, char** argv) {
     else if (a == "--transport") {
       if (v == "loopback") o.device.transport.kind = config::TransportKind::loopback;
       else if (v == "socketcan") o.device.transport.kind = config::TransportKind::socketcan;
-      else throw std::invalid_argument("--transport " + v + ": the fake device speaks loopback or socketcan here "
-                                       "(hid and usb_bulk are presented through uhid/FunctionFS in HIL tests)");
+      else if (v == "hid") o.device.transport.kind = config::TransportKind::hid;
+      else if (v == "usb_bulk") o.device.transport.kind = config::TransportKind::usb_bulk;
+      else throw std::invalid_argument("--transport " + v + ": loopback, socketcan, hid or usb_bulk");
     } else if (a == "--address") o.device.transport.address = v;
     else if (a == "--framing") { o.device.transport.framing = v; o.device.transport.can_fd = v == "canfd"; }
     else if (a == "--node") o.device.transport.can_node_id = static_cast<std::uint32_t>(number(1));
@@ -119,9 +126,12 @@ Options parse(int argc, char** argv) {
     if (watchdog_given) o.device.watchdogs.device_watchdog_ms = watchdog;
     o.kind = d->kind == config::DeviceKind::spacemouse ? "spacemouse" : "haptic_arm";
   }
+  if (o.device.transport.kind == config::TransportKind::hid && o.device.transport.address.empty())
+    o.device.transport.address = o.kind == "spacemouse" ? "256f:c635" : "1209:4846";
   if (o.device.transport.address.empty()) throw std::invalid_argument("--address (or --rig/--device) is required");
-  if (o.device.transport.kind == config::TransportKind::socketcan && o.device.transport.framing == "hid")
-    throw std::invalid_argument("--framing hid makes no sense on socketcan");
+  if (o.device.transport.kind == config::TransportKind::socketcan && o.device.transport.framing != "can" &&
+      o.device.transport.framing != "canfd")
+    throw std::invalid_argument("--framing " + o.device.transport.framing + ": SocketCAN carries can or canfd");
   if (o.kind != "haptic_arm" && o.kind != "spacemouse")
     throw std::invalid_argument("--kind " + o.kind + ": choose haptic_arm or spacemouse");
   if (o.drop_probability > 1) throw std::invalid_argument("--drop-probability must be within 0..1");
@@ -171,9 +181,32 @@ void send_spacemouse_reports(device::Transport& transport, const config::PoseTwi
   }
 }
 
+// The device end of the rig's transport. USB is presented for real where the kernel can: HID
+// through uhid (the host's hidapi sees a hidraw node), bulk through a FunctionFS gadget.
+std::unique_ptr<device::MessageLink> open_device_side(const Options& o, fake::UhidTransport** uhid) {
+  const config::Transport& t = o.device.transport;
+  const auto node = static_cast<std::uint8_t>(t.can_node_id);
+  if (t.kind == config::TransportKind::hid) {
+    std::uint16_t vendor = 0, product = 0;
+    device::parse_vid_pid(t.address, vendor, product);
+    const bool mouse = o.kind == "spacemouse";
+    auto transport = std::make_unique<fake::UhidTransport>(
+        mouse ? device::kSpaceMouseHidDescriptor : device::kHapfluidHidDescriptor,
+        mouse ? sizeof device::kSpaceMouseHidDescriptor : sizeof device::kHapfluidHidDescriptor, vendor, product,
+        mouse ? "hapfluid fake SpaceMouse" : "hapfluid fake haptic arm");
+    *uhid = transport.get();
+    return std::make_unique<device::MessageLink>(std::move(transport), device::Framing::hid, node, device::Side::device);
+  }
+  if (t.kind == config::TransportKind::usb_bulk)
+    return std::make_unique<device::MessageLink>(std::make_unique<fake::FunctionFsTransport>(t.address),
+                                                 device::Framing::bulk, node, device::Side::device);
+  return device::open_link(t, device::Side::device);
+}
+
 int run(const Options& o) {
   const config::RigDevice& d = o.device;
-  auto link = device::open_link(d.transport, device::Side::device);
+  fake::UhidTransport* uhid = nullptr;
+  auto link = open_device_side(o, &uhid);
   fake::DeviceModel model;
   model.watchdog_ms = static_cast<int>(std::lround(d.watchdogs.device_watchdog_ms));
   model.max_force_n = d.limits.max_force_n;
@@ -194,6 +227,14 @@ int run(const Options& o) {
   fake::Hand hand(motion, interactive);
   fake::FakeFirmware firmware(model, motion.start, link->sequence_modulus());
   const bool spacemouse = o.kind == "spacemouse";
+  if (uhid && !spacemouse) {  // feature report 3: the INFO packet, for tools (protocol.md 4.4)
+    hf_message info;
+    std::memset(&info, 0, sizeof info);
+    info.type = HF_MSG_INFO;
+    info.body.info = firmware.info();
+    std::uint8_t report[device::kHidReportBytes] = {3};
+    if (hf_encode_packet(&info, report + 1, sizeof report - 1) > 0) uhid->set_feature_report(3, report, sizeof report);
+  }
 
   FILE* log = nullptr;
   if (!o.log_path.empty()) {

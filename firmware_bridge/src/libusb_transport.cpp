@@ -45,9 +45,10 @@ class LibusbTransport final : public Transport {
       throw TransportError("libusb: cannot claim interface 0 of " + address + ": " + libusb_strerror(r) +
                            " (another program holds it?)");
     }
+    find_bulk_endpoints();
     for (auto& slot : in_) {
       slot.transfer = libusb_alloc_transfer(0);
-      libusb_fill_bulk_transfer(slot.transfer, handle_, kBulkEndpointIn, slot.buffer, sizeof slot.buffer,
+      libusb_fill_bulk_transfer(slot.transfer, handle_, endpoint_in_, slot.buffer, sizeof slot.buffer,
                                 &LibusbTransport::on_in, this, 0);
       if (libusb_submit_transfer(slot.transfer) != 0) errors_ |= kDisconnected;
       else ++pending_;
@@ -74,7 +75,7 @@ class LibusbTransport final : public Transport {
     for (auto& slot : out_) {
       if (slot.busy) continue;
       std::memcpy(slot.buffer, frame.data, frame.length);
-      libusb_fill_bulk_transfer(slot.transfer, handle_, kBulkEndpointOut, slot.buffer, frame.length,
+      libusb_fill_bulk_transfer(slot.transfer, handle_, endpoint_out_, slot.buffer, frame.length,
                                 &LibusbTransport::on_out, &slot, 100);
       slot.owner = this;
       if (libusb_submit_transfer(slot.transfer) != 0) {
@@ -117,6 +118,23 @@ class LibusbTransport final : public Transport {
     LibusbTransport* owner = nullptr;
   };
 
+  // The device's bulk endpoints on interface 0, from its descriptors: a gadget's UDC may assign
+  // other addresses than the nominal 0x01/0x81 (FunctionFS on dummy_hcd does).
+  void find_bulk_endpoints() {
+    libusb_config_descriptor* config = nullptr;
+    if (libusb_get_active_config_descriptor(libusb_get_device(handle_), &config) != 0) return;
+    for (int a = 0; config->bNumInterfaces > kBulkInterface && a < config->interface[kBulkInterface].num_altsetting; ++a) {
+      const libusb_interface_descriptor& alt = config->interface[kBulkInterface].altsetting[a];
+      for (int e = 0; e < alt.bNumEndpoints; ++e) {
+        const libusb_endpoint_descriptor& ep = alt.endpoint[e];
+        if ((ep.bmAttributes & LIBUSB_TRANSFER_TYPE_MASK) != LIBUSB_TRANSFER_TYPE_BULK) continue;
+        if (ep.bEndpointAddress & LIBUSB_ENDPOINT_IN) endpoint_in_ = ep.bEndpointAddress;
+        else endpoint_out_ = ep.bEndpointAddress;
+      }
+    }
+    libusb_free_config_descriptor(config);
+  }
+
   bool busy_out() const {
     for (const auto& slot : out_)
       if (slot.busy) return true;
@@ -157,6 +175,8 @@ class LibusbTransport final : public Transport {
   std::array<OutSlot, kOutTransfers> out_{};
   std::array<WireFrame, kRing> ring_{};
   std::uint64_t head_ = 0, tail_ = 0;
+  std::uint8_t endpoint_in_ = kBulkEndpointIn;
+  std::uint8_t endpoint_out_ = kBulkEndpointOut;
   int pending_ = 0;
   std::uint32_t errors_ = 0;
 };

@@ -43,13 +43,13 @@ std::unique_ptr<Transport> open_transport(const config::Transport& t, Framing fr
       return std::make_unique<SocketCanTransport>(t.address, t.can_fd, t.can_node_id);
     case config::TransportKind::hid:
       if (side == Side::device)
-        throw TransportError("the fake device presents itself over HID through uhid (hardware-in-the-loop "
-                             "tests); here use transport.kind = \"loopback\" with framing = \"hid\"");
+        throw TransportError("the device end of a HID transport is a USB device: haptic-fake-device presents "
+                             "one through uhid (fake/uhid_transport.hpp)");
       return open_hidapi_transport(t.address);
     case config::TransportKind::usb_bulk:
       if (side == Side::device)
-        throw TransportError("the fake device presents itself over USB bulk through FunctionFS "
-                             "(hardware-in-the-loop tests); here use transport.kind = \"loopback\" with framing = \"bulk\"");
+        throw TransportError("the device end of a USB bulk transport is a USB device: haptic-fake-device "
+                             "presents one through FunctionFS (fake/functionfs_transport.hpp)");
       return open_libusb_transport(t.address);
   }
   throw TransportError("unknown transport kind");

@@ -1,0 +1,128 @@
+"""python-can interface for hapfluid's loopback bus (firmware_bridge/protocol.md, section 4.6).
+
+The bus end (haptic-fake-device) binds a Unix datagram socket and relays every peer's frames to
+the other peers; each datagram is a kernel `struct can_frame` (16 bytes) or `struct canfd_frame`
+(72 bytes). This adapter joins as a peer, so python-can tools (can_monitor.py, cantools, your own
+scripts) see the very bytes a SocketCAN bus would carry:
+
+    from hapfluid_proto import pycan_loopback
+    pycan_loopback.register()            # adds interface "hapfluid_loopback" to python-can
+    bus = can.Bus(interface="hapfluid_loopback", channel="/tmp/hapfluid-left.sock")
+"""
+from __future__ import annotations
+
+import select
+import socket
+import struct
+import time
+
+import can
+
+CAN_EFF_FLAG = 0x80000000
+CAN_RTR_FLAG = 0x40000000
+CAN_ERR_FLAG = 0x20000000
+CAN_EFF_MASK = 0x1FFFFFFF
+CAN_SFF_MASK = 0x000007FF
+CANFD_BRS = 0x01
+CANFD_ESI = 0x02
+CAN_FRAME = struct.Struct("=IB3x8s")     # struct can_frame
+CANFD_FRAME = struct.Struct("=IBB2x64s")  # struct canfd_frame
+HELLO_PERIOD_S = 0.5  # re-register so a restarted bus learns about a listen-only peer
+
+
+def register() -> None:
+    """Makes `can.Bus(interface="hapfluid_loopback", ...)` work in this process."""
+    can.interfaces.BACKENDS["hapfluid_loopback"] = ("hapfluid_proto.pycan_loopback", "LoopbackBus")
+    valid = frozenset(can.interfaces.BACKENDS)
+    # python-can validates the name against copies of this set taken at import time
+    for module in (can.interfaces, can.util, can):
+        if hasattr(module, "VALID_INTERFACES"):
+            module.VALID_INTERFACES = valid
+
+
+def pack(msg: can.Message) -> bytes:
+    can_id = msg.arbitration_id & (CAN_EFF_MASK if msg.is_extended_id else CAN_SFF_MASK)
+    if msg.is_extended_id:
+        can_id |= CAN_EFF_FLAG
+    if msg.is_remote_frame:
+        can_id |= CAN_RTR_FLAG
+    if msg.is_error_frame:
+        can_id |= CAN_ERR_FLAG
+    data = bytes(msg.data)
+    if msg.is_fd:
+        flags = (CANFD_BRS if msg.bitrate_switch else 0) | (CANFD_ESI if msg.error_state_indicator else 0)
+        return CANFD_FRAME.pack(can_id, len(data), flags, data)
+    return CAN_FRAME.pack(can_id, len(data), data)
+
+
+def unpack(raw: bytes, channel: str) -> can.Message | None:
+    if len(raw) == CAN_FRAME.size:
+        can_id, length, data = CAN_FRAME.unpack(raw)
+        fd, flags = False, 0
+    elif len(raw) == CANFD_FRAME.size:
+        can_id, length, flags, data = CANFD_FRAME.unpack(raw)
+        fd = True
+    else:
+        return None  # not a CAN frame (an HID/bulk loopback bus): nothing a CAN tool can show
+    extended = bool(can_id & CAN_EFF_FLAG)
+    return can.Message(timestamp=time.time(), arbitration_id=can_id & (CAN_EFF_MASK if extended else CAN_SFF_MASK),
+                       is_extended_id=extended, is_remote_frame=bool(can_id & CAN_RTR_FLAG),
+                       is_error_frame=bool(can_id & CAN_ERR_FLAG), is_fd=fd, bitrate_switch=bool(flags & CANFD_BRS),
+                       error_state_indicator=bool(flags & CANFD_ESI), dlc=min(length, 64), data=data[:length],
+                       channel=channel, check=False)
+
+
+class LoopbackBus(can.BusABC):
+    """A peer on a hapfluid loopback bus. `channel` is the bus socket path."""
+
+    def __init__(self, channel: str, fd: bool = True, **kwargs):
+        self.channel_info = f"hapfluid loopback {channel}"
+        self._path = str(channel)
+        self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        self._sock.bind("")  # autobind: a unique abstract address
+        self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+        self._last_hello = 0.0
+        try:
+            self._hello()
+        except OSError as err:
+            self._sock.close()
+            raise can.CanInterfaceNotImplementedError(
+                f"no hapfluid loopback bus at {self._path} ({err}): start haptic-fake-device --address {self._path}"
+            ) from err
+        super().__init__(channel=channel, **kwargs)
+
+    def _hello(self):
+        self._sock.sendto(b"", self._path)
+        self._last_hello = time.monotonic()
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        try:
+            self._sock.sendto(pack(msg), self._path)
+        except OSError as err:
+            raise can.CanOperationError(f"loopback bus {self._path}: {err}") from err
+
+    def _recv_internal(self, timeout):
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            if time.monotonic() - self._last_hello > HELLO_PERIOD_S:
+                try:
+                    self._hello()
+                except OSError:
+                    pass  # the bus is restarting; keep listening
+            wait = HELLO_PERIOD_S if deadline is None else max(0.0, min(HELLO_PERIOD_S, deadline - time.monotonic()))
+            ready, _, _ = select.select([self._sock], [], [], wait)
+            if ready:
+                raw = self._sock.recv(128)
+                msg = unpack(raw, self._path)
+                if msg is not None:
+                    return msg, False
+                continue
+            if deadline is not None and time.monotonic() >= deadline:
+                return None, False
+
+    def fileno(self) -> int:
+        return self._sock.fileno()
+
+    def shutdown(self) -> None:
+        super().shutdown()
+        self._sock.close()
