@@ -128,3 +128,18 @@ check_hidapi_lists() {
     grep -q "^HID_ID=0006:" "/sys/class/hidraw/${node#/dev/}/device/uevent" || fail "hidapi does not list $1:$2"
     echo "KNOWN-BUG: haptic-fake-device presents $3 on uhid with bus BUS_VIRTUAL (0x06); hidapi 0.13 (Debian 12) does not list it, so a rig address '$1:$2' cannot open it (the driver is tested through $node). Fix: bus = BUS_USB (0x03) in UHID_CREATE2 (fake/uhid_transport.cpp)"
 }
+# candump_sample LOG: the first and last 10 frames of every CAN ID in a candump -L log. cantools
+# decodes ~300 frames/s under TCG, so the DBC is checked on every message kind seen on the bus
+# (first and last: before and after the commands changed) rather than on every frame.
+candump_sample() {
+    awk '{ split($3, a, "#"); id = a[1]; n[id]++
+           if (n[id] <= 10) print; else last[id, n[id] % 10] = $0 }
+         END { for (k in last) print last[k] }' "$1"
+}
+# cantools_decode DBC <LOG: `cantools decode --single-line DBC`, the same CLI entry point, with
+# matplotlib (imported only by cantools' `plot` subcommand) kept out: under TCG that import alone
+# costs ~20 s, and decoding needs none of it.
+cantools_decode() {
+    "$HIL_PY" -c "import sys; sys.modules['matplotlib'] = None; import cantools; sys.argv[0] = 'cantools'; sys.exit(cantools._main())" \
+        decode --single-line "$1"
+}

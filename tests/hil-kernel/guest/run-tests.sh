@@ -12,6 +12,24 @@ export HIL_GUEST="$HIL_SRC/tests/hil-kernel/guest"
 
 names=() statuses=() durations=() messages=()
 
+# Whatever a test set up in the kernel goes away after it, passed or not, so the next test starts
+# from a clean guest: USB gadgets (unbound, FunctionFS unmounted, configfs tree removed), vcan
+# interfaces and uhid devices (those die with their processes, killed before this runs).
+teardown() {
+    local g l d
+    for g in /sys/kernel/config/usb_gadget/*/; do
+        [ -d "$g" ] || continue
+        echo "" >"$g/UDC" 2>/dev/null
+        for l in "$g"configs/*/*; do [ -L "$l" ] && rm -f "$l"; done
+    done
+    awk '$3 == "functionfs" { print $2 }' /proc/mounts | while read -r d; do umount "$d" 2>/dev/null; done
+    for g in /sys/kernel/config/usb_gadget/*/; do
+        [ -d "$g" ] || continue
+        rmdir "$g"configs/*/strings/* "$g"configs/* "$g"functions/* "$g"strings/* "$g" 2>/dev/null
+    done
+    for d in $(ip -o link show type vcan 2>/dev/null | awk -F': ' '{ print $2 }'); do ip link del "$d"; done
+}
+
 xml_escape() { sed -e 's/&/\&amp;/g' -e 's/</\&lt;/g' -e 's/>/\&gt;/g' -e 's/"/\&quot;/g'; }
 
 write_reports() {
@@ -51,6 +69,8 @@ while IFS=$'\t' read -r name limit script; do
     wait $pid
     rc=$?
     kill -KILL -- -$pid 2>/dev/null
+    sleep 0.2  # let the killed processes release their files before the teardown
+    teardown
     t1=$(date +%s.%N)
     dur=$(awk -v a="$t0" -v b="$t1" 'BEGIN { printf "%.1f", b - a }')
     if [ $rc -eq 0 ]; then
