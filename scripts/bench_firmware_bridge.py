@@ -9,6 +9,8 @@ as separate processes on the loopback bus and records:
   - state rate seen by the host, bad frames, sequence gaps;
   - watchdog reaction: the host falls silent; the device's own time from the last valid command
     to zero motor torque, and the host-observed time from its silence to a state reporting it.
+Both processes run under SCHED_FIFO (chrt) when the user may, as on a rig; otherwise with normal
+scheduling, which the records say ("sched"): on a loaded machine those numbers include starvation.
 Writes a JSON list of {"bench", "params", "metrics"} records.
 """
 import argparse
@@ -19,16 +21,27 @@ import sys
 import tempfile
 
 
+def realtime_prefix() -> list[str]:
+    try:
+        ok = subprocess.run(["chrt", "-f", "60", "true"], capture_output=True).returncode == 0
+    except FileNotFoundError:
+        ok = False
+    return ["chrt", "-f", "60"] if ok else []
+
+
+PREFIX = realtime_prefix()
+
+
 def run_pair(build: pathlib.Path, framing: str, seconds: float, probe_args: list[str], fake_args: list[str]):
     with tempfile.TemporaryDirectory() as tmp:
         sock = pathlib.Path(tmp) / "bus.sock"
-        fake = subprocess.Popen([str(build / "bin/haptic-fake-device"), "--address", str(sock), "--framing", framing,
+        fake = subprocess.Popen([*PREFIX, str(build / "bin/haptic-fake-device"), "--address", str(sock), "--framing", framing,
                                  "--duration", str(seconds + 1.0), *fake_args],
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
         if "ready" not in fake.stdout.readline():
             fake.kill()
             sys.exit("haptic-fake-device did not start")
-        probe = subprocess.run([str(build / "bin/haptic-device-probe"), "--transport", "loopback", "--address",
+        probe = subprocess.run([*PREFIX, str(build / "bin/haptic-device-probe"), "--transport", "loopback", "--address",
                                 str(sock), "--framing", framing, "--duration", str(seconds), *probe_args],
                                capture_output=True, text=True, timeout=seconds + 30)
         if probe.returncode != 0:
@@ -49,7 +62,8 @@ def main():
         print(f"bench_firmware_bridge: round trip, {framing}, {args.seconds} s", file=sys.stderr)
         report, _ = run_pair(args.build, framing, args.seconds, ["--force", "1,0,0", "--enable"], [])
         records.append({"bench": "firmware_bridge_loopback_round_trip",
-                        "params": {"framing": framing, "seconds": args.seconds, "rate_hz": 1000},
+                        "params": {"framing": framing, "seconds": args.seconds, "rate_hz": 1000,
+                                   "sched": "fifo" if PREFIX else "other"},
                         "metrics": {"rtt_p50_us": report["rtt_p50_us"], "rtt_p99_us": report["rtt_p99_us"],
                                     "rtt_max_us": report["rtt_max_us"], "rtt_samples": report["rtt_samples"],
                                     "state_rate_hz": report["state_rate_hz"], "frames_bad": report["frames_bad"],
@@ -64,7 +78,8 @@ def main():
         reactions.append(summary["watchdog_reaction_ms"])
         seen.append(report["watchdog_seen_after_silence_ms"])
     records.append({"bench": "firmware_bridge_device_watchdog",
-                    "params": {"watchdog_ms": 20, "framing": "can", "trials": len(reactions)},
+                    "params": {"watchdog_ms": 20, "framing": "can", "trials": len(reactions),
+                               "sched": "fifo" if PREFIX else "other"},
                     "metrics": {"device_reaction_ms_max": max(reactions), "device_reaction_ms_mean": sum(reactions) / len(reactions),
                                 "host_observed_ms_max": max(seen), "host_observed_ms_mean": sum(seen) / len(seen)}})
     print(f"  device reaction {min(reactions):.2f}..{max(reactions):.2f} ms, host sees it after "

@@ -86,6 +86,7 @@ void FakeFirmware::step(double t_s, double dt_s, const config::PoseTwist& hand) 
       !(faults_ & HF_FAULT_COMMAND_WATCHDOG)) {
     raise(HF_FAULT_COMMAND_WATCHDOG, 0, static_cast<std::uint32_t>(silence_ms));
     watchdog_trip_s_ = t_s;
+    watchdog_trip_last_command_s_ = last_command_s_;
   }
   motors_on_ = (command_.flags & HF_CMD_ENABLE) && faults_ == 0;
 

@@ -59,8 +59,9 @@ class FakeFirmware {
   // True once per new fault: the caller sends a FAULT message right away.
   bool take_new_fault() { bool f = new_fault_; new_fault_ = false; return f; }
   const TickRecord& record() const { return record_; }
-  // The time the watchdog tripped and the last valid command before it (-1: never tripped).
+  // The time the watchdog last tripped and the last valid command before it (-1: never tripped).
   double watchdog_trip_s() const { return watchdog_trip_s_; }
+  double watchdog_trip_last_command_s() const { return watchdog_trip_last_command_s_; }
   double last_command_s() const { return last_command_s_; }
   std::uint64_t commands_applied() const { return commands_applied_; }
   std::uint32_t command_sequence_gaps() const { return seq_.gaps; }
@@ -78,6 +79,7 @@ class FakeFirmware {
   std::uint16_t command_seq_ = 0;
   double last_command_s_ = -1;
   double watchdog_trip_s_ = -1;
+  double watchdog_trip_last_command_s_ = -1;
   std::uint8_t faults_ = 0;
   std::uint8_t fault_cause_ = 0;
   std::uint32_t fault_detail_ = 0;

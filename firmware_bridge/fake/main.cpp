@@ -324,7 +324,7 @@ int run(const Options& o) {
     firmware.step(t, dt, target);
     if (firmware.watchdog_trip_s() == t)
       std::fprintf(stderr, "haptic-fake-device: watchdog: no valid command for %.1f ms, motors off at t=%.3f s\n",
-                   (t - firmware.last_command_s()) * 1e3, t);
+                   (t - firmware.watchdog_trip_last_command_s()) * 1e3, t);
 
     // 4. transmit
     if (spacemouse) {
@@ -388,7 +388,7 @@ int run(const Options& o) {
   if (log) std::fclose(log);
 
   const double reaction_ms = firmware.watchdog_trip_s() >= 0
-                                 ? (firmware.watchdog_trip_s() - firmware.last_command_s()) * 1e3 : -1;
+                                 ? (firmware.watchdog_trip_s() - firmware.watchdog_trip_last_command_s()) * 1e3 : -1;
   char summary[1024];
   std::snprintf(summary, sizeof summary,
                 "{\"ticks\": %llu, \"ticks_lost\": %llu, \"states_sent\": %llu, \"states_dropped\": %llu, "

@@ -133,7 +133,9 @@ int run(const Options& o) {
       last_state_ns = state.host_receive_ns;
       faults_seen |= state.fault;
       status_seen |= state.status;
-      if ((state.status & HF_STATUS_WATCHDOG_TRIPPED) && !watchdog_seen_ns) watchdog_seen_ns = state.host_receive_ns;
+      // only a trip after the deliberate silence counts (a starved host may trip it earlier)
+      if ((state.status & HF_STATUS_WATCHDOG_TRIPPED) && !watchdog_seen_ns && silence_start_ns)
+        watchdog_seen_ns = state.host_receive_ns;
       if ((state.status & HF_STATUS_ESTOP_LATCHED) && !estop_seen_ns) estop_seen_ns = state.host_receive_ns;
       std::uint16_t echo = state.command_echo & 0xFF;
       if (echo != last_echo && sent_ns[echo] && state.host_receive_ns > sent_ns[echo]) {
@@ -168,7 +170,7 @@ int run(const Options& o) {
   std::snprintf(
       text, sizeof text,
       "{\"device\": \"%s\", \"duration_s\": %.3f, \"states\": %llu, \"state_rate_hz\": %.1f, "
-      "\"longest_state_gap_ms\": %.3f, "
+      "\"longest_state_gap_ms\": %.3f, \"last_state_age_ms\": %.3f, "
       "\"rtt_samples\": %zu, \"rtt_p50_us\": %.1f, \"rtt_p99_us\": %.1f, \"rtt_max_us\": %.1f, "
       "\"frames_ok\": %llu, \"frames_bad\": %llu, \"sequence_gaps\": %llu, \"commands_sent\": %llu, "
       "\"send_errors\": %llu, \"transport_errors\": %u, \"transport_errors_now\": %u, \"connected\": %s, "
@@ -177,6 +179,7 @@ int run(const Options& o) {
       "\"watchdog_seen_after_silence_ms\": %.3f, \"estop_seen_after_request_ms\": %.3f, "
       "\"info\": %s}\n",
       dev->name(), o.duration_s, static_cast<unsigned long long>(states), span_s > 0 ? progressed / span_s : 0.0, longest_gap_ms,
+      last_state_ns ? (device::monotonic_ns() - last_state_ns) * 1e-6 : -1.0,
       rtt_us.size(), percentile(rtt_us, 50), percentile(rtt_us, 99), percentile(rtt_us, 100),
       static_cast<unsigned long long>(h.frames_ok), static_cast<unsigned long long>(h.frames_bad),
       static_cast<unsigned long long>(h.sequence_gaps), static_cast<unsigned long long>(h.commands_sent),

@@ -1,9 +1,9 @@
 """python-can interface for hapfluid's loopback bus (firmware_bridge/protocol.md, section 4.6).
 
-The bus end (haptic-fake-device) binds a Unix datagram socket and relays every peer's frames to
-the other peers; each datagram is a kernel `struct can_frame` (16 bytes) or `struct canfd_frame`
-(72 bytes). This adapter joins as a peer, so python-can tools (can_monitor.py, cantools, your own
-scripts) see the very bytes a SocketCAN bus would carry:
+The bus end (haptic-fake-device) listens on a Unix SOCK_SEQPACKET socket and relays every peer's
+frames to the other peers; each packet is a kernel `struct can_frame` (16 bytes) or `struct
+canfd_frame` (72 bytes). This adapter connects as a peer, so python-can tools (can_monitor.py,
+cantools, your own scripts) see the very bytes a SocketCAN bus would carry:
 
     from hapfluid_proto import pycan_loopback
     pycan_loopback.register()            # adds interface "hapfluid_loopback" to python-can
@@ -27,7 +27,7 @@ CANFD_BRS = 0x01
 CANFD_ESI = 0x02
 CAN_FRAME = struct.Struct("=IB3x8s")     # struct can_frame
 CANFD_FRAME = struct.Struct("=IBB2x64s")  # struct canfd_frame
-HELLO_PERIOD_S = 0.5  # re-register so a restarted bus learns about a listen-only peer
+RECONNECT_PERIOD_S = 0.1  # after the bus went away (the fake device restarted)
 
 
 def register() -> None:
@@ -78,41 +78,62 @@ class LoopbackBus(can.BusABC):
     def __init__(self, channel: str, fd: bool = True, **kwargs):
         self.channel_info = f"hapfluid loopback {channel}"
         self._path = str(channel)
-        self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
-        self._sock.bind("")  # autobind: a unique abstract address
-        self._sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
-        self._last_hello = 0.0
+        self._sock = None
         try:
-            self._hello()
+            self._connect()
         except OSError as err:
-            self._sock.close()
             raise can.CanInterfaceNotImplementedError(
                 f"no hapfluid loopback bus at {self._path} ({err}): start haptic-fake-device --address {self._path}"
             ) from err
+        self._next_reconnect = 0.0
         super().__init__(channel=channel, **kwargs)
 
-    def _hello(self):
-        self._sock.sendto(b"", self._path)
-        self._last_hello = time.monotonic()
+    def _connect(self):
+        sock = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 20)
+        try:
+            sock.connect(self._path)
+        except OSError:
+            sock.close()
+            raise
+        if self._sock is not None:
+            self._sock.close()
+        self._sock = sock
+
+    def _reconnect(self) -> bool:
+        if time.monotonic() < self._next_reconnect:
+            return False
+        self._next_reconnect = time.monotonic() + RECONNECT_PERIOD_S
+        try:
+            self._connect()
+            return True
+        except OSError:
+            return False
 
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         try:
-            self._sock.sendto(pack(msg), self._path)
+            self._sock.send(pack(msg))
         except OSError as err:
-            raise can.CanOperationError(f"loopback bus {self._path}: {err}") from err
+            if not self._reconnect():
+                raise can.CanOperationError(f"loopback bus {self._path}: {err}") from err
+            self._sock.send(pack(msg))
 
     def _recv_internal(self, timeout):
         deadline = None if timeout is None else time.monotonic() + timeout
         while True:
-            if time.monotonic() - self._last_hello > HELLO_PERIOD_S:
-                try:
-                    self._hello()
-                except OSError:
-                    pass  # the bus is restarting; keep listening
-            wait = HELLO_PERIOD_S if deadline is None else max(0.0, min(HELLO_PERIOD_S, deadline - time.monotonic()))
+            wait = None if deadline is None else max(0.0, deadline - time.monotonic())
             ready, _, _ = select.select([self._sock], [], [], wait)
             if ready:
-                raw = self._sock.recv(128)
+                try:
+                    raw = self._sock.recv(128)
+                except OSError:
+                    raw = b""
+                if not raw:  # the bus closed: it restarts under us; keep trying to rejoin
+                    time.sleep(RECONNECT_PERIOD_S)
+                    self._reconnect()
+                    if deadline is not None and time.monotonic() >= deadline:
+                        return None, False
+                    continue
                 msg = unpack(raw, self._path)
                 if msg is not None:
                     return msg, False

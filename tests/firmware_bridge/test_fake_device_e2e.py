@@ -10,6 +10,10 @@ from fake_device import FakeDevice, probe
 
 FRAMINGS = ["can", "canfd", "hid", "bulk"]
 HAND_STIFFNESS_N_PER_M = 400.0  # fake_firmware.hpp DeviceModel
+# Tests that are not about the watchdog give the device a long one: the probe is not real-time
+# scheduled, and a loaded CI machine can starve it for tens of ms (which a 20 ms watchdog
+# rightly punishes). The watchdog's own tests use their own values.
+RELAXED_WATCHDOG = ("--watchdog-ms", 250)
 
 
 @pytest.fixture
@@ -21,14 +25,14 @@ def programs(binary):
 def test_state_streams_at_1khz_and_commanded_force_moves_the_handle(programs, tmp_path, framing):
     fake, prober = programs
     sock = tmp_path / "bus.sock"
-    with FakeDevice(fake, sock, "--framing", framing, "--node", 5, duration=2.2) as dev:
+    with FakeDevice(fake, sock, "--framing", framing, "--node", 5, *RELAXED_WATCHDOG, duration=2.2) as dev:
         report = probe(prober, sock, "--framing", framing, "--node", 5, "--duration", 1.5,
                        "--force", "2,0,-1", "--enable")
         summary = dev.finish()
     # 1 kHz state: within 10 % over 1.5 s (a loaded CI machine may late a few ticks)
     assert 900 <= report["state_rate_hz"] <= 1100, report
     assert report["frames_bad"] == 0 and report["transport_errors"] == 0
-    assert report["info"]["watchdog_ms"] == 20 and report["info"]["vendor_id"] == 0x1209
+    assert report["info"]["watchdog_ms"] == 250 and report["info"]["vendor_id"] == 0x1209
     # every command the host sent was applied by the device (none lost on a local bus)
     assert summary["commands_applied"] == report["commands_sent"]
     assert summary["command_sequence_gaps"] == 0
@@ -43,24 +47,25 @@ def test_state_streams_at_1khz_and_commanded_force_moves_the_handle(programs, tm
 
 @pytest.mark.parametrize("framing", ["can", "bulk"])
 def test_device_watchdog_zeroes_force_after_host_silence(programs, tmp_path, framing):
+    # 50 ms here, so that a CI machine starving the (non-real-time) probe does not trip it before
+    # the deliberate silence; the tick-exact 20 ms rule is tested in test_fake_firmware.cpp
     fake, prober = programs
     sock, log = tmp_path / "bus.sock", tmp_path / "device.csv"
-    with FakeDevice(fake, sock, "--framing", framing, "--log", log, "--watchdog-ms", 20, duration=1.6) as dev:
+    with FakeDevice(fake, sock, "--framing", framing, "--log", log, "--watchdog-ms", 50, duration=1.6) as dev:
         report = probe(prober, sock, "--framing", framing, "--duration", 1.0, "--force", "3,0,0", "--enable",
                        "--silent-after", 0.5)
         summary = dev.finish()
-    # device side: motors off once 20 ms passed without a command; the tick-exact rule is tested in
-    # test_fake_firmware.cpp, here a loaded CI machine may wake the device's 1 ms tick late
-    assert 20.0 <= summary["watchdog_reaction_ms"] <= 30.0, summary
+    # device side: motors off once 50 ms passed without a command (a late-woken device tick adds a little)
+    assert 50.0 <= summary["watchdog_reaction_ms"] <= 60.0, summary
     rows = list(csv.DictReader(open(log)))
     last_cmd = max(float(r["t_s"]) for r in rows if r["cmd_received"] == "1")
-    after = [r for r in rows if float(r["t_s"]) >= last_cmd + 0.030]
+    after = [r for r in rows if float(r["t_s"]) >= last_cmd + 0.060]
     assert after and all(float(r["applied_fx"]) == 0.0 for r in after), "force must stay off"
     before = [r for r in rows if 0.3 < float(r["t_s"]) < last_cmd]
     assert all(float(r["applied_fx"]) == 3.0 for r in before)
     # host side: the fault is reported within the watchdog plus a few ms of transport
     assert report["faults_seen"] & 1 and report["final_status"] & 0x08
-    assert 19.0 <= report["watchdog_seen_after_silence_ms"] <= 40.0, report
+    assert 49.0 <= report["watchdog_seen_after_silence_ms"] <= 70.0, report
 
 
 def test_corrupted_crc_and_dropped_frames_are_detected(programs, tmp_path):
@@ -81,10 +86,10 @@ def test_silent_device_leaves_a_gap_the_host_can_see(programs, tmp_path):
     sock = tmp_path / "bus.sock"
     with FakeDevice(fake, sock, "--framing", "hid", "--silent-after", 0.6, duration=1.5):
         report = probe(prober, sock, "--framing", "hid", "--duration", 1.2)
-    assert report["states"] > 300
-    assert report["final_status"] is not None
-    # the last state is >0.4 s old when the probe ends: the loop's link watchdog will fire on this
-    assert report["state_rate_hz"] > 900 and report["states"] < 800
+    # states flowed at 1 kHz, then stopped: when the probe ends the newest state is ~0.5 s old,
+    # which the loop's link watchdog (link_timeout_ms, 5 ms by default) turns into a fault
+    assert report["state_rate_hz"] > 900 and 300 < report["states"] < 800
+    assert report["last_state_age_ms"] > 300, report
 
 
 def test_device_that_stops_answering_trips_its_own_watchdog_while_the_host_still_sends(programs, tmp_path):
@@ -165,7 +170,7 @@ def test_same_exchange_on_real_socketcan_where_the_kernel_has_it(programs, frami
     import subprocess
     fake, prober = programs
     dev = subprocess.Popen([str(fake), "--transport", "socketcan", "--address", interface, "--framing", framing,
-                            "--node", "6", "--duration", "2.2"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            "--node", "6", "--duration", "2.2", "--watchdog-ms", "250"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                            text=True)
     assert "ready" in dev.stdout.readline()
     report = json.loads(subprocess.run([str(prober), "--transport", "socketcan", "--address", interface, "--framing",
@@ -186,7 +191,7 @@ name = "left"
 kind = "haptic_arm"
 transport = {{ kind = "loopback", address = "{left}", framing = "canfd", can_node_id = 1 }}
 max_force_n = 4.0
-device_watchdog_ms = 10.0
+device_watchdog_ms = 200.0
 [[devices]]
 name = "right"
 kind = "haptic_arm"
@@ -196,20 +201,20 @@ transport = {{ kind = "loopback", address = "{right}", framing = "bulk", can_nod
 
 def test_both_ends_read_one_rig_file(programs, tmp_path):
     # haptic-rt and the fake device take the same [[devices]] entry: transport, node, framing,
-    # motor limit (4 N here) and device watchdog (10 ms) come from the rig file
+    # motor limit (4 N here) and device watchdog (200 ms) come from the rig file
     fake, prober = programs
     rig = tmp_path / "rig.toml"
     rig.write_text(RIG.format(left=tmp_path / "left.sock", right=tmp_path / "right.sock"))
     import subprocess
     dev = subprocess.Popen([str(fake), "--rig", str(rig), "--device", "left", "--duration", "1.5"],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert "framing canfd, node 1, watchdog 10 ms" in dev.stdout.readline()
+    assert "framing canfd, node 1, watchdog 200 ms" in dev.stdout.readline()
     result = subprocess.run([str(prober), "--rig", str(rig), "--device", "left", "--duration", "1.0",
                              "--force", "6,0,0", "--enable"], capture_output=True, text=True, timeout=30)
     dev.communicate(timeout=10)
     import json
     report = json.loads(result.stdout)
-    assert report["device"] == "left" and report["info"]["watchdog_ms"] == 10
+    assert report["device"] == "left" and report["info"]["watchdog_ms"] == 200
     assert report["info"]["max_force_n"] == pytest.approx(4.0)
     # 6 N commanded, the device's 4 N motor limit applies: 4 N / 400 N/m = 10 mm, saturation reported
     assert report["mean_position_late_half_m"][0] == pytest.approx(4.0 / HAND_STIFFNESS_N_PER_M, abs=0.5e-3)
@@ -219,7 +224,7 @@ def test_both_ends_read_one_rig_file(programs, tmp_path):
 def test_scripted_stir_reaches_the_host_and_interactive_targets_move_the_handle(programs, tmp_path):
     fake, prober = programs
     sock = tmp_path / "bus.sock"
-    with FakeDevice(fake, sock, "--motion", "stir", duration=1.6):
+    with FakeDevice(fake, sock, "--motion", "stir", *RELAXED_WATCHDOG, duration=1.6):
         report = probe(prober, sock, "--duration", 1.2)
     # stir: 3 cm strokes at 1 Hz along x, followed by the handle through the hand's grip
     assert 0.02 < report["max_abs_position_m"] < 0.035, report
@@ -227,7 +232,8 @@ def test_scripted_stir_reaches_the_host_and_interactive_targets_move_the_handle(
     import json
     import subprocess
     sock2 = tmp_path / "bus2.sock"
-    dev = subprocess.Popen([str(fake), "--address", str(sock2), "--motion", "interactive", "--duration", "1.6"],
+    dev = subprocess.Popen([str(fake), "--address", str(sock2), "--motion", "interactive", "--duration", "1.6",
+                            "--watchdog-ms", "250"],
                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert "ready" in dev.stdout.readline()
     dev.stdin.write("0 0.02 0\n")  # the operator moves the hand 2 cm along y
@@ -252,3 +258,51 @@ def test_fake_device_usb_presentation_fails_clearly_without_uhid_or_functionfs(p
     bulk = subprocess.run([str(fake), "--transport", "usb_bulk", "--address", str(tmp_path / "ffs"), "--duration",
                            "0.2"], capture_output=True, text=True, timeout=10)
     assert bulk.returncode == 2 and "usb_f_fs" in bulk.stderr and "dummy_hcd" in bulk.stderr
+
+
+SCENE = """
+name = "fake_motion_only"
+duration_s = 2.0
+[domain]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.40, 0.30, 0.40]
+[fluid]
+rest_density_kg_m3 = 1000.0
+particle_spacing_m = 0.02
+viscosity_pa_s = 0.2
+speed_of_sound_m_s = 4.0
+[[fluid.blocks]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.40, 0.30, 0.08]
+[[devices]]
+name = "hand"
+source = "scripted"
+start_position_m = [0.0, 0.0, 0.0]
+[[devices.motion]]
+kind = "oscillate"
+axis = [0.0, 1.0, 0.0]
+amplitude_m = 0.02
+frequency_hz = 1.0
+"""
+
+
+def test_a_scene_files_scripted_device_motion_drives_the_hand(programs, tmp_path):
+    # the same scripted motion the simulator's batch runs use (config::evaluate_motion): here a
+    # 2 cm, 1 Hz oscillation along y, which the host sees in the handle's pose
+    fake, prober = programs
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE)
+    sock = tmp_path / "bus.sock"
+    with FakeDevice(fake, sock, "--motion", f"scene:{scene}:hand", *RELAXED_WATCHDOG, duration=1.6):
+        report = probe(prober, sock, "--duration", 1.2)
+    assert 0.015 < report["max_abs_position_m"] < 0.025, report
+
+
+def test_unknown_scene_device_is_named(programs, tmp_path):
+    import subprocess
+    fake, _ = programs
+    scene = tmp_path / "scene.toml"
+    scene.write_text(SCENE)
+    result = subprocess.run([str(fake), "--address", str(tmp_path / "b.sock"), "--motion", f"scene:{scene}:left"],
+                            capture_output=True, text=True, timeout=10)
+    assert result.returncode == 2 and "no device named 'left'" in result.stderr

@@ -56,3 +56,17 @@ def test_scaling_table_matches_codec():
 def test_crc_check_values_quoted_in_the_document():
     assert "0x29B1" in DOC and codec.crc16(b"123456789") == 0x29B1
     assert "0x4B" in DOC and codec.crc8(b"123456789") == 0x4B
+
+
+def test_bus_load_table_is_what_busload_computes():
+    from hapfluid_proto import busload
+    rows = {(r["bus"], r["case"]): r for r in busload.table()}
+    for bus, label in (("classic CAN 1 Mbit/s", "classic CAN, 1 Mbit/s"), ("CAN FD 1/2 Mbit/s", "CAN FD, 1 / 2 Mbit/s"),
+                       ("CAN FD 1/5 Mbit/s", "CAN FD, 1 / 5 Mbit/s")):
+        line = next(l for l in DOC.splitlines() if l.startswith(f"| {label} |"))
+        nominal = rows[(bus, "nominal")]["us_per_device_ms"]
+        worst = rows[(bus, "worst")]["us_per_device_ms"]
+        assert f"| {nominal:.0f} (" in line and f"| {worst:.0f} (" in line, (line, nominal, worst)
+    # the conclusion the document draws: classic CAN carries one device at 1 kHz, FD 1/5 carries 3
+    assert rows[("classic CAN 1 Mbit/s", "worst")]["devices_at_100pct"] == 1
+    assert rows[("CAN FD 1/5 Mbit/s", "worst")]["devices_at_70pct"] == 3

@@ -45,7 +45,7 @@ const char* hf_result_name(int result) {
 uint16_t hf_crc16(const uint8_t* data, size_t length) {
   uint16_t crc = 0xFFFF;
   for (size_t i = 0; i < length; ++i) {
-    crc ^= (uint16_t)(data[i] << 8);
+    crc = (uint16_t)(crc ^ (data[i] << 8));
     for (int bit = 0; bit < 8; ++bit)
       crc = (crc & 0x8000) ? (uint16_t)((crc << 1) ^ 0x1021) : (uint16_t)(crc << 1);
   }
@@ -55,7 +55,7 @@ uint16_t hf_crc16(const uint8_t* data, size_t length) {
 uint8_t hf_crc8(const uint8_t* data, size_t length) {
   uint8_t crc = 0xFF;
   for (size_t i = 0; i < length; ++i) {
-    crc ^= data[i];
+    crc = (uint8_t)(crc ^ data[i]);
     for (int bit = 0; bit < 8; ++bit)
       crc = (crc & 0x80) ? (uint8_t)((crc << 1) ^ 0x1D) : (uint8_t)(crc << 1);
   }
