@@ -17,14 +17,16 @@ cp /etc/group /tmp/group
 grep -q '^hapfluid:' /tmp/group || echo 'hapfluid:x:977:' >>/tmp/group
 mount --bind /tmp/group /etc/group
 
-start_fake arm --transport hid --address 1209:4846 --motion hold
+# Only presence matters here (no driver talks to them): 50 Hz keeps four fake devices from
+# saturating the one emulated CPU.
+start_fake arm --transport hid --address 1209:4846 --motion hold --rate-hz 50
 arm_pid=$FAKE_PID
-start_fake sm --transport hid --kind spacemouse --motion hold
+start_fake sm --transport hid --kind spacemouse --motion hold --rate-hz 50
 sm_pid=$FAKE_PID
 ffs_gadget hapfluid 1209 4846 /run/ffs-hapfluid
-start_fake usb --transport usb_bulk --address /run/ffs-hapfluid --motion hold
+start_fake usb --transport usb_bulk --address /run/ffs-hapfluid --motion hold --rate-hz 50
 wait_for 10 gadget_bind hapfluid dummy_udc.0 || fail "could not bind the gadget"
-start_fake other --transport hid --address 1209:0001 --motion hold   # an unrelated HID device
+start_fake other --transport hid --address 1209:0001 --motion hold --rate-hz 50   # an unrelated HID device
 other_pid=$FAKE_PID
 wait_for 20 hidraw_of 1209 4846 >/dev/null || fail "no hidraw node for the arm"
 wait_for 20 hidraw_of 256F C635 >/dev/null || fail "no hidraw node for the SpaceMouse"
