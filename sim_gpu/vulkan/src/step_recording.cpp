@@ -54,6 +54,76 @@ void VulkanSolver::record_sort(VkCommandBuffer cb) {
   compute_barrier(cb);
 }
 
+void VulkanSolver::record_body_sort(VkCommandBuffer cb) {
+  // The same counting sort on the body particles: second half of the count/start/order arrays.
+  const ComputeProgram& p = *program_;
+  const std::uint32_t nb = body_particle_count_, nf = fluid_count_;
+  p.dispatch(cb, Pass::hash_bodies, groups(nb, 64), {nb, nf, cell_count_, 0});
+  compute_barrier(cb);
+  p.dispatch(cb, Pass::scan_local, scan_blocks_, {cell_count_, cell_count_, body_start_base_, 0});
+  compute_barrier(cb);
+  p.dispatch(cb, Pass::scan_blocks, 1, {cell_count_, cell_count_, body_start_base_, 0});
+  compute_barrier(cb);
+  p.dispatch(cb, Pass::scan_add, groups(cell_count_, 256), {cell_count_, cell_count_, body_start_base_, 0});
+  compute_barrier(cb);
+  p.dispatch(cb, Pass::scatter, groups(nb, 64), {nb, nf, body_start_base_, 0});
+  compute_barrier(cb);
+  p.dispatch(cb, Pass::order_cells, groups(cell_count_, 64), {cell_count_, nf, body_start_base_, 0});
+  compute_barrier(cb);
+  p.dispatch(cb, Pass::gather_bodies, groups(nb, 64));
+  compute_barrier(cb);
+}
+
+void VulkanSolver::record_body_step(VkCommandBuffer head, VkCommandBuffer tail) {
+  // Head: everything up to the per-body sums the host needs to integrate the bodies.
+  const ComputeProgram& p = *program_;
+  const std::uint32_t bodies = static_cast<std::uint32_t>(m_.bodies.size());
+  std::uint32_t query = 0;
+  auto stamp = [&](VkCommandBuffer cb) {
+    if (body_queries_) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, body_queries_, query);
+    ++query;
+  };
+  VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  check(vkBeginCommandBuffer(head, &begin), "vkBeginCommandBuffer");
+  if (body_queries_) vkCmdResetQueryPool(head, body_queries_, 0, kBodyStepQueries);
+  host_to_compute_barrier(head);
+  stamp(head);
+  record_sort(head);
+  record_body_sort(head);
+  stamp(head);
+  p.dispatch(head, Pass::density, groups(fluid_count_, 64));
+  p.dispatch(head, Pass::body_contact_pressure, groups(body_particle_count_, 64));
+  compute_barrier(head);
+  stamp(head);
+  p.dispatch(head, Pass::fluid_forces, groups(fluid_count_, 64));
+  p.dispatch(head, Pass::body_forces, groups(body_particle_count_, 64));
+  compute_barrier(head);
+  stamp(head);
+  p.dispatch(head, Pass::body_sums, body_chunk_count_);
+  compute_barrier(head);
+  p.dispatch(head, Pass::body_sums_final, bodies, {body_chunk_count_, 0, 0, 0});
+  compute_barrier(head);
+  stamp(head);
+  compute_to_host_barrier(head);
+  check(vkEndCommandBuffer(head), "vkEndCommandBuffer");
+
+  // Tail: after the host wrote the new body states, eq. 14 and the fluid leap-frog.
+  check(vkBeginCommandBuffer(tail, &begin), "vkBeginCommandBuffer");
+  host_to_compute_barrier(tail);
+  stamp(tail);
+  p.dispatch(tail, Pass::body_update, groups(body_particle_count_, 64));
+  compute_barrier(tail);
+  stamp(tail);
+  p.dispatch(tail, Pass::integrate_fluid, groups(fluid_count_, 64));
+  compute_barrier(tail);
+  stamp(tail);
+  record_maxima(tail);
+  compute_barrier(tail);
+  stamp(tail);
+  compute_to_host_barrier(tail);
+  check(vkEndCommandBuffer(tail), "vkEndCommandBuffer");
+}
+
 void VulkanSolver::record_maxima(VkCommandBuffer cb) {
   const ComputeProgram& p = *program_;
   p.dispatch(cb, Pass::max_speed, max_groups_);

@@ -49,27 +49,42 @@ struct VulkanSolver::Buffers {
   Buffer f_pos, f_vel, f_id, s_pos, s_vel, s_id, s_density, s_acc;
   Buffer cell_count, cell_start, block_sums, cell_of, rank, order;
   Buffer w_a, w_b, w_c, w_cell_start;
-  Buffer dummy_vec4, dummy_cell_start;  // stand-ins for the body arrays (no dynamic bodies)
+  Buffer b_pos, b_vel, b_rest, b_force, b_contact, b_pressure, v_a, v_b, v_c;
+  Buffer body_state, body_chunks, body_partials, body_sums;
   TexelView t_s_pos, t_s_vel, t_s_density, t_cell_start, t_w_a, t_w_b, t_w_c, t_w_cell_start;
-  TexelView t_dummy_vec4, t_dummy_cell_start;
+  TexelView t_v_a, t_v_b, t_v_c, t_v_cell_start;
 };
 
 VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& options) : m_(std::move(model)) {
-  for (const RigidBody& body : m_.bodies)
-    if (body.dynamic)
-      throw std::runtime_error("Vulkan backend: scene '" + m_.scene_name + "' has the dynamic body '" + body.name +
-                               "'; dynamic bodies run on the cpu backend only in this build");
   context_ = std::make_unique<Context>(options.context);
   program_ = std::make_unique<ComputeProgram>(*context_);
   devices_.resize(m_.devices.size());
   for (std::size_t d = 0; d < m_.devices.size(); ++d)
     devices_[d] = device_state_from(config::evaluate_motion(m_.devices[d].motion, 0.0));
+  couplings_of_body_.resize(m_.bodies.size());
+  for (auto& c : m_.couplings) couplings_of_body_[c.body].push_back(&c);
+  // Body particle velocities at start (eq. 14 with the initial body velocities), as CpuSolver.
+  BodyParticles& bp = m_.body_particles;
+  for (const RigidBody& body : m_.bodies) {
+    if (!body.dynamic) continue;
+    for (std::uint32_t i = body.first_particle; i < body.first_particle + body.particle_count; ++i) {
+      const Vec3 v = body.velocity_at({bp.x[i], bp.y[i], bp.z[i]});
+      bp.vx[i] = static_cast<float>(v.x), bp.vy[i] = static_cast<float>(v.y), bp.vz[i] = static_cast<float>(v.z);
+    }
+  }
 
   fluid_count_ = static_cast<std::uint32_t>(m_.fluid.size());
   solid_count_ = static_cast<std::uint32_t>(m_.static_solids.size());
+  body_particle_count_ = static_cast<std::uint32_t>(bp.size());
   cell_count_ = static_cast<std::uint32_t>(m_.params.grid.cell_count());
+  // The body cell starts follow the fluid's in one buffer, at an offset a texel view may start at.
+  const std::uint32_t align =
+      std::max<std::uint32_t>(1, static_cast<std::uint32_t>(context_->properties().limits.minTexelBufferOffsetAlignment / 4));
+  body_start_base_ = (cell_count_ + 1 + align - 1) / align * align;
   scan_blocks_ = groups(cell_count_, 1024);
-  max_groups_ = groups(std::max<std::uint32_t>(fluid_count_, 1), 256);
+  max_groups_ = groups(std::max<std::uint32_t>(fluid_count_ + body_particle_count_, 1), 256);
+  for (const RigidBody& body : m_.bodies)
+    if (body.dynamic) body_chunk_count_ += groups(body.particle_count, 256);
   create_buffers();
   upload_model();
 
@@ -87,12 +102,19 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
   }
   // The CFL inputs of the initial state.
   write_params(0.0f);
-  VkCommandBuffer cb = VK_NULL_HANDLE;
-  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-  alloc.commandPool = context_->command_pool();
-  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
-  alloc.commandBufferCount = 1;
-  check(vkAllocateCommandBuffers(context_->device(), &alloc, &cb), "vkAllocateCommandBuffers");
+  if (body_particle_count_ > 0) {
+    write_body_states();
+    if (queries_) {
+      VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+      info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+      info.queryCount = kBodyStepQueries;
+      check(vkCreateQueryPool(context_->device(), &info, nullptr, &body_queries_), "vkCreateQueryPool");
+    }
+    body_head_ = allocate_command_buffer();
+    body_tail_ = allocate_command_buffer();
+    record_body_step(body_head_, body_tail_);
+  }
+  VkCommandBuffer cb = allocate_command_buffer();
   recorded_[0] = cb;
   record_steps(cb, 0);
   submit_and_wait(cb);
@@ -103,7 +125,10 @@ VulkanSolver::~VulkanSolver() {
   if (!context_) return;
   vkDeviceWaitIdle(context_->device());
   for (auto& [n, cb] : recorded_) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
+  for (VkCommandBuffer cb : {body_head_, body_tail_})
+    if (cb) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
   if (queries_) vkDestroyQueryPool(context_->device(), queries_, nullptr);
+  if (body_queries_) vkDestroyQueryPool(context_->device(), body_queries_, nullptr);
   if (fence_) vkDestroyFence(context_->device(), fence_, nullptr);
   program_.reset();
   b_.reset();
@@ -114,6 +139,8 @@ void VulkanSolver::create_buffers() {
   b_ = std::make_unique<Buffers>();
   Buffers& b = *b_;
   const VkDeviceSize nf = std::max<std::uint32_t>(fluid_count_, 1), ns = std::max<std::uint32_t>(solid_count_, 1);
+  const VkDeviceSize nb = std::max<std::uint32_t>(body_particle_count_, 1), all = nf + nb;
+  const VkDeviceSize bodies = std::max<std::size_t>(m_.bodies.size(), 1), chunks = std::max<std::uint32_t>(body_chunk_count_, 1);
   const VkDeviceSize vec4 = 16, u32 = 4;
   b.params = Buffer(c, sizeof(ParamsBlock), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, MemoryUse::host);
   b.reduce = Buffer(c, u32 * (4 + 2 * max_groups_), kStorage, MemoryUse::host);
@@ -125,29 +152,42 @@ void VulkanSolver::create_buffers() {
   b.s_id = Buffer(c, u32 * nf, kStorage, MemoryUse::device);
   b.s_density = Buffer(c, vec4 * nf, kTexel, MemoryUse::device);
   b.s_acc = Buffer(c, vec4 * nf, kStorage, MemoryUse::device);
-  b.cell_count = Buffer(c, u32 * cell_count_, kStorage, MemoryUse::device);
-  b.cell_start = Buffer(c, u32 * (cell_count_ + 1), kTexel, MemoryUse::device);
+  b.cell_count = Buffer(c, u32 * 2 * cell_count_, kStorage, MemoryUse::device);
+  b.cell_start = Buffer(c, u32 * (body_start_base_ + cell_count_ + 1), kTexel, MemoryUse::device);
   b.block_sums = Buffer(c, u32 * scan_blocks_, kStorage, MemoryUse::device);
-  b.cell_of = Buffer(c, u32 * nf, kStorage, MemoryUse::device);
-  b.rank = Buffer(c, u32 * nf, kStorage, MemoryUse::device);
-  b.order = Buffer(c, u32 * nf, kStorage, MemoryUse::device);
+  b.cell_of = Buffer(c, u32 * all, kStorage, MemoryUse::device);
+  b.rank = Buffer(c, u32 * all, kStorage, MemoryUse::device);
+  b.order = Buffer(c, u32 * all, kStorage, MemoryUse::device);
   b.w_a = Buffer(c, vec4 * ns, kTexel, MemoryUse::device);
   b.w_b = Buffer(c, vec4 * ns, kTexel, MemoryUse::device);
   b.w_c = Buffer(c, vec4 * ns, kTexel, MemoryUse::device);
   b.w_cell_start = Buffer(c, u32 * (cell_count_ + 1), kTexel, MemoryUse::device);
-  b.dummy_vec4 = Buffer(c, vec4, kTexel, MemoryUse::device);
-  b.dummy_cell_start = Buffer(c, u32 * 4, kTexel, MemoryUse::device);
+  b.b_pos = Buffer(c, vec4 * nb, kStorage, MemoryUse::device);
+  b.b_vel = Buffer(c, vec4 * nb, kStorage, MemoryUse::device);
+  b.b_rest = Buffer(c, vec4 * nb, kStorage, MemoryUse::device);
+  b.b_force = Buffer(c, vec4 * nb, kStorage, MemoryUse::device);
+  b.b_contact = Buffer(c, vec4 * nb, kStorage, MemoryUse::device);
+  b.b_pressure = Buffer(c, u32 * nb, kStorage, MemoryUse::device);
+  b.v_a = Buffer(c, vec4 * nb, kTexel, MemoryUse::device);
+  b.v_b = Buffer(c, vec4 * nb, kTexel, MemoryUse::device);
+  b.v_c = Buffer(c, vec4 * nb, kTexel, MemoryUse::device);
+  b.body_state = Buffer(c, vec4 * 8 * bodies, kStorage, MemoryUse::host);
+  b.body_chunks = Buffer(c, vec4 * chunks, kStorage, MemoryUse::device);
+  b.body_partials = Buffer(c, vec4 * 4 * chunks, kStorage, MemoryUse::device);
+  b.body_sums = Buffer(c, vec4 * 4 * bodies, kStorage, MemoryUse::host);
 
   b.t_s_pos = TexelView(c, b.s_pos, kVec4);
   b.t_s_vel = TexelView(c, b.s_vel, kVec4);
   b.t_s_density = TexelView(c, b.s_density, kVec4);
-  b.t_cell_start = TexelView(c, b.cell_start, kUint);
+  b.t_cell_start = TexelView(c, b.cell_start, kUint, 0, u32 * (cell_count_ + 1));
+  b.t_v_cell_start = TexelView(c, b.cell_start, kUint, u32 * body_start_base_, u32 * (cell_count_ + 1));
+  b.t_v_a = TexelView(c, b.v_a, kVec4);
+  b.t_v_b = TexelView(c, b.v_b, kVec4);
+  b.t_v_c = TexelView(c, b.v_c, kVec4);
   b.t_w_a = TexelView(c, b.w_a, kVec4);
   b.t_w_b = TexelView(c, b.w_b, kVec4);
   b.t_w_c = TexelView(c, b.w_c, kVec4);
   b.t_w_cell_start = TexelView(c, b.w_cell_start, kUint);
-  b.t_dummy_vec4 = TexelView(c, b.dummy_vec4, kVec4);
-  b.t_dummy_cell_start = TexelView(c, b.dummy_cell_start, kUint);
 
   ComputeProgram& p = *program_;
   p.bind_uniform(BINDING_PARAMS, b.params);
@@ -174,13 +214,23 @@ void VulkanSolver::create_buffers() {
   p.bind_texel(BINDING_T_W_B, b.t_w_b);
   p.bind_texel(BINDING_T_W_C, b.t_w_c);
   p.bind_texel(BINDING_T_W_CELL_START, b.t_w_cell_start);
-  // No dynamic bodies in this backend yet: their bindings get small placeholders.
-  for (std::uint32_t binding : {BINDING_B_POS, BINDING_B_VEL, BINDING_B_REST, BINDING_B_FORCE, BINDING_B_CONTACT,
-                                BINDING_B_PRESSURE, BINDING_V_A, BINDING_V_B, BINDING_V_C, BINDING_BODY_STATE,
-                                BINDING_BODY_CHUNKS, BINDING_BODY_PARTIALS, BINDING_BODY_SUMS})
-    p.bind_storage(binding, b.dummy_vec4);
-  for (std::uint32_t binding : {BINDING_T_V_A, BINDING_T_V_B, BINDING_T_V_C}) p.bind_texel(binding, b.t_dummy_vec4);
-  p.bind_texel(BINDING_T_V_CELL_START, b.t_dummy_cell_start);
+  p.bind_storage(BINDING_B_POS, b.b_pos);
+  p.bind_storage(BINDING_B_VEL, b.b_vel);
+  p.bind_storage(BINDING_B_REST, b.b_rest);
+  p.bind_storage(BINDING_B_FORCE, b.b_force);
+  p.bind_storage(BINDING_B_CONTACT, b.b_contact);
+  p.bind_storage(BINDING_B_PRESSURE, b.b_pressure);
+  p.bind_storage(BINDING_V_A, b.v_a);
+  p.bind_storage(BINDING_V_B, b.v_b);
+  p.bind_storage(BINDING_V_C, b.v_c);
+  p.bind_storage(BINDING_BODY_STATE, b.body_state);
+  p.bind_storage(BINDING_BODY_CHUNKS, b.body_chunks);
+  p.bind_storage(BINDING_BODY_PARTIALS, b.body_partials);
+  p.bind_storage(BINDING_BODY_SUMS, b.body_sums);
+  p.bind_texel(BINDING_T_V_A, b.t_v_a);
+  p.bind_texel(BINDING_T_V_B, b.t_v_b);
+  p.bind_texel(BINDING_T_V_C, b.t_v_c);
+  p.bind_texel(BINDING_T_V_CELL_START, b.t_v_cell_start);
   p.commit_bindings();
 }
 
@@ -194,8 +244,9 @@ void VulkanSolver::upload_model() {
   // Accelerations of the initial state enter the first CFL bound; S_ACC holds them.
   b.s_acc.upload(pack4(nf, f.ax.data(), f.ay.data(), f.az.data(), nullptr).data(), 16 * nf);
   b.s_density.upload(pack4(nf, f.density.data(), f.pressure.data(), f.volume.data(), nullptr).data(), 16 * nf);
-  const std::vector<std::uint32_t> zeros(cell_count_, 0);
-  b.cell_count.upload(zeros.data(), 4 * zeros.size());
+  const std::vector<std::uint32_t> zeros(body_start_base_ + cell_count_ + 1, 0);
+  b.cell_count.upload(zeros.data(), 4 * 2 * cell_count_);
+  b.cell_start.upload(zeros.data(), 4 * zeros.size());
 
   const SortedSolids& s = m_.static_solids;
   const std::size_t ns = s.size();
@@ -211,10 +262,60 @@ void VulkanSolver::upload_model() {
   } else {
     b.w_cell_start.upload(zeros.data(), 4 * std::min<std::size_t>(zeros.size(), cell_count_ + 1));
   }
-  const std::uint32_t zero4[4] = {0, 0, 0, 0};
-  b.dummy_cell_start.upload(zero4, sizeof zero4);
-  const float zero_vec4[4] = {0, 0, 0, 0};
-  b.dummy_vec4.upload(zero_vec4, sizeof zero_vec4);
+
+  // Dynamic body particles, grouped per body, and the reduction chunks: at most 256 particles
+  // of one body each, so a chunk's workgroup sums one body.
+  const BodyParticles& bp = m_.body_particles;
+  const std::size_t nb = bp.size();
+  if (nb == 0) return;
+  std::vector<float> body_of(nb);
+  for (std::size_t i = 0; i < nb; ++i) body_of[i] = static_cast<float>(bp.body[i]);
+  b.b_pos.upload(pack4(nb, bp.x.data(), bp.y.data(), bp.z.data(), bp.volume.data()).data(), 16 * nb);
+  b.b_vel.upload(pack4(nb, bp.vx.data(), bp.vy.data(), bp.vz.data(), bp.viscosity.data()).data(), 16 * nb);
+  b.b_rest.upload(pack4(nb, bp.rx.data(), bp.ry.data(), bp.rz.data(), body_of.data()).data(), 16 * nb);
+  b.b_pressure.upload(bp.pressure.data(), 4 * nb);
+  std::vector<std::uint32_t> chunks;
+  for (std::size_t body = 0; body < m_.bodies.size(); ++body) {
+    const RigidBody& rb = m_.bodies[body];
+    if (!rb.dynamic) continue;
+    for (std::uint32_t first = 0; first < rb.particle_count; first += 256)
+      chunks.insert(chunks.end(), {static_cast<std::uint32_t>(body), rb.first_particle + first,
+                                   std::min<std::uint32_t>(256, rb.particle_count - first), 0});
+  }
+  b.body_chunks.upload(chunks.data(), 4 * chunks.size());
+}
+
+void VulkanSolver::write_body_states() {
+  // Per body 8 vec4: centre of mass, the rows of R, linear and angular velocity (float: the
+  // particles are float; the state itself stays double on the host).
+  std::vector<float> state(32 * m_.bodies.size(), 0.0f);
+  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
+    const RigidBody& body = m_.bodies[b];
+    float* s = &state[32 * b];
+    const Mat3 r = body.rotation();
+    const Vec3 rows[6] = {body.position, {r.m[0][0], r.m[0][1], r.m[0][2]}, {r.m[1][0], r.m[1][1], r.m[1][2]},
+                          {r.m[2][0], r.m[2][1], r.m[2][2]}, body.linear_velocity, body.angular_velocity};
+    for (int k = 0; k < 6; ++k)
+      s[4 * k] = static_cast<float>(rows[k].x), s[4 * k + 1] = static_cast<float>(rows[k].y),
+      s[4 * k + 2] = static_cast<float>(rows[k].z);
+  }
+  if (!state.empty()) b_->body_state.upload(state.data(), 4 * state.size());
+}
+
+void VulkanSolver::integrate_bodies(double dt) {
+  // Algorithm 2, lines 6-9 on the host, in double, with CpuSolver's own integrate_body.
+  const float* sums = static_cast<const float*>(b_->body_sums.mapped());
+  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
+    RigidBody& body = m_.bodies[b];
+    if (!body.dynamic) continue;
+    const float* s = sums + 16 * b;
+    body.fluid_force = {s[0], s[1], s[2]};
+    body.fluid_torque = {s[4], s[5], s[6]};
+    body.contact_force = {s[8], s[9], s[10]};
+    body.contact_torque = {s[12], s[13], s[14]};
+    integrate_body(body, couplings_of_body_[b], devices_, m_.params.gravity_m_s2, dt);
+  }
+  write_body_states();
 }
 
 void VulkanSolver::write_params(float dt) {
@@ -233,7 +334,8 @@ void VulkanSolver::write_params(float dt) {
   }
   block.grid_origin[3] = p.grid.cell_size;
   block.grid_dims[3] = static_cast<std::int32_t>(cell_count_);
-  block.counts[0] = fluid_count_, block.counts[1] = solid_count_, block.counts[2] = 0, block.counts[3] = 0;
+  block.counts[0] = fluid_count_, block.counts[1] = solid_count_, block.counts[2] = body_particle_count_;
+  block.counts[3] = static_cast<std::uint32_t>(m_.bodies.size());
   b_->params.upload(&block, sizeof block);
 }
 
@@ -267,6 +369,10 @@ int VulkanSolver::advance(double duration_s) {
 
 void VulkanSolver::step_many(double dt, int substeps) {
   if (substeps <= 0) return;
+  if (body_particle_count_ > 0) {
+    for (int s = 0; s < substeps; ++s) step_with_bodies(dt);
+    return;
+  }
   write_params(static_cast<float>(dt));
   std::uint32_t* reduce = static_cast<std::uint32_t*>(b_->reduce.mapped());
   reduce[0] = 0;  // clamped-particle counter of this submission
@@ -275,6 +381,43 @@ void VulkanSolver::step_many(double dt, int substeps) {
   read_results(substeps);
   for (int s = 0; s < substeps; ++s) time_s_ += dt;
   steps_ += static_cast<std::uint64_t>(substeps);
+}
+
+void VulkanSolver::step_with_bodies(double dt) {
+  write_params(static_cast<float>(dt));
+  std::uint32_t* reduce = static_cast<std::uint32_t*>(b_->reduce.mapped());
+  reduce[0] = 0;
+  submit_and_wait(body_head_);
+  integrate_bodies(dt);
+  submit_and_wait(body_tail_);
+  read_results(0);
+  if (body_queries_) {
+    std::uint64_t ticks[kBodyStepQueries];
+    check(vkGetQueryPoolResults(context_->device(), body_queries_, 0, kBodyStepQueries, sizeof ticks, ticks,
+                                sizeof(std::uint64_t), VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+          "vkGetQueryPoolResults");
+    const double s_per_tick = context_->timestamp_period_ns() * 1e-9;
+    auto span = [&](int a, int b) { return static_cast<double>(ticks[b] - ticks[a]) * s_per_tick; };
+    pass_times_.sort_s += span(0, 1);
+    pass_times_.density_s += span(1, 2);
+    pass_times_.forces_s += span(2, 3);
+    pass_times_.bodies_s += span(3, 4) + span(5, 6);
+    pass_times_.integration_s += span(6, 7);
+    pass_times_.reductions_s += span(7, 8);
+    pass_times_.steps += 1;
+  }
+  time_s_ += dt;
+  ++steps_;
+}
+
+VkCommandBuffer VulkanSolver::allocate_command_buffer() {
+  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  alloc.commandPool = context_->command_pool();
+  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  alloc.commandBufferCount = 1;
+  VkCommandBuffer cb = VK_NULL_HANDLE;
+  check(vkAllocateCommandBuffers(context_->device(), &alloc, &cb), "vkAllocateCommandBuffers");
+  return cb;
 }
 
 VkCommandBuffer VulkanSolver::command_buffer_for(int substeps) {
@@ -338,6 +481,7 @@ PhaseTimes VulkanSolver::phase_times() const {
   t.neighbour_search_s = pass_times_.sort_s;
   t.density_s = pass_times_.density_s;
   t.forces_s = pass_times_.forces_s;
+  t.bodies_s = pass_times_.bodies_s;
   t.integration_s = pass_times_.integration_s + pass_times_.reductions_s;
   return t;
 }
@@ -357,6 +501,21 @@ void VulkanSolver::sync_particles() {
     f.vx[i] = vel[4 * i], f.vy[i] = vel[4 * i + 1], f.vz[i] = vel[4 * i + 2];
     f.ax[i] = acc[4 * i], f.ay[i] = acc[4 * i + 1], f.az[i] = acc[4 * i + 2];
     f.density[i] = density[4 * i], f.pressure[i] = density[4 * i + 1], f.volume[i] = density[4 * i + 2];
+  }
+  BodyParticles& bp = m_.body_particles;
+  const std::size_t nb = body_particle_count_;
+  if (nb == 0) return;
+  std::vector<float> bpos(4 * nb), bvel(4 * nb), force(4 * nb), contact(4 * nb);
+  b.b_pos.download(bpos.data(), 16 * nb);
+  b.b_vel.download(bvel.data(), 16 * nb);
+  b.b_force.download(force.data(), 16 * nb);
+  b.b_contact.download(contact.data(), 16 * nb);
+  b.b_pressure.download(bp.pressure.data(), 4 * nb);
+  for (std::size_t i = 0; i < nb; ++i) {
+    bp.x[i] = bpos[4 * i], bp.y[i] = bpos[4 * i + 1], bp.z[i] = bpos[4 * i + 2];
+    bp.vx[i] = bvel[4 * i], bp.vy[i] = bvel[4 * i + 1], bp.vz[i] = bvel[4 * i + 2];
+    bp.fx[i] = force[4 * i], bp.fy[i] = force[4 * i + 1], bp.fz[i] = force[4 * i + 2];
+    bp.cx[i] = contact[4 * i], bp.cy[i] = contact[4 * i + 1], bp.cz[i] = contact[4 * i + 2];
   }
 }
 

@@ -4,10 +4,17 @@
 //
 // Per step on the device: hashing into the uniform grid, counting sort by cell (atomic counts,
 // a three-dispatch prefix scan, scatter, per-cell ordering by particle index so the order equals
-// the CPU's stable sort), density (eqs. 2, 7), forces (eqs. 5, 6, 9), fluid leap-frog. Substeps
-// of a frame are recorded into one command buffer (recorded once per substep count, then
-// re-submitted); only the CFL inputs (two maxima) come back per frame, and the particles only
-// when sync_particles() is called (frame export, publishing).
+// the CPU's stable sort), density (eqs. 2, 7), forces (eqs. 5, 6, 9), fluid leap-frog. Without
+// dynamic bodies the substeps of a frame are one command buffer (recorded once per substep
+// count, then re-submitted); only the CFL inputs (two maxima) come back per frame, and the
+// particles only when sync_particles() is called (frame export, publishing).
+//
+// With dynamic bodies each step is two submissions: the device computes the body particles'
+// forces and reduces them per body (eqs. 10-12, two-pass tree reduction of §4.3); the host reads
+// back those few numbers, integrates each body with the couplings (Algorithm 2, lines 6-9:
+// CpuSolver's integrate_body, a 6x6 implicit solve in double) and writes the body states; the
+// device then moves the rigid particles (eq. 14) and integrates the fluid. Per step only the
+// per-body sums come back, which is also what the 1 kHz loop needs.
 //
 // The API mirrors CpuSolver so that a batch runner or the live loop can drive either.
 #pragma once
@@ -37,6 +44,7 @@ struct PassTimes {
   double density_s = 0;
   double forces_s = 0;
   double integration_s = 0;
+  double bodies_s = 0;      // body contact pressure, body forces, per-body reductions, eq. 14
   double reductions_s = 0;  // CFL maxima
   std::uint64_t steps = 0;
 };
@@ -86,7 +94,14 @@ class VulkanSolver {
   VkCommandBuffer command_buffer_for(int substeps);
   void record_steps(VkCommandBuffer cb, int substeps);
   void record_sort(VkCommandBuffer cb);
+  void record_body_sort(VkCommandBuffer cb);
+  void step_with_bodies(double dt);
+  void integrate_bodies(double dt);
+  void write_body_states();
+  VkCommandBuffer allocate_command_buffer();
   void record_maxima(VkCommandBuffer cb);
+  void record_body_step(VkCommandBuffer head, VkCommandBuffer tail);
+  static constexpr std::uint32_t kBodyStepQueries = 9;
   void submit_and_wait(VkCommandBuffer cb);
   void read_results(int substeps);
   // Substep counts up to this many get per-pass timestamps (the query pool is sized once).
@@ -101,6 +116,10 @@ class VulkanSolver {
   std::vector<DeviceState> devices_;
 
   std::uint32_t fluid_count_ = 0, solid_count_ = 0, cell_count_ = 0, scan_blocks_ = 0, max_groups_ = 0;
+  std::uint32_t body_particle_count_ = 0, body_start_base_ = 0, body_chunk_count_ = 0;
+  std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
+  VkCommandBuffer body_head_ = VK_NULL_HANDLE, body_tail_ = VK_NULL_HANDLE;
+  VkQueryPool body_queries_ = VK_NULL_HANDLE;
   struct Buffers;
   std::unique_ptr<Buffers> b_;
   VkQueryPool queries_ = VK_NULL_HANDLE;
