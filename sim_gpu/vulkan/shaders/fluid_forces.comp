@@ -3,8 +3,8 @@
 // Forces on fluid particles (Algorithm 1, lines 4-12), as acceleration a = f / m = sum / rho:
 //   pressure (eq. 5):        -V_p sum_i V_i (P_p + P_i) grad W
 //   viscosity (eqs. 6, 9):    V_p sum_i V_i (mu_p + mu_i) / 2 (v_i - v_p) lap W
-// Wall and body particles take the fluid particle's own pressure (pressure mirroring); walls
-// are free-slip (no_slip = 0). Mirrors CpuSolver::compute_fluid_forces term by term. Neighbour
+// Wall and body particles take the fluid particle's own pressure (pressure mirroring).
+// Mirrors CpuSolver::compute_fluid_forces term by term. Neighbour
 // data come through texel buffers; velocity, density and pressure are fetched only for
 // particles inside the support radius.
 #include "common.glsl"
@@ -26,8 +26,9 @@ vec3 a;
 vec3 xi, vi;
 float pi_, mui;
 
-// Solid neighbours: pressure mirrored, viscosity scaled by no_slip (1 for bodies, 0 for walls
-// unless the solid says otherwise).
+// Solid neighbours: pressure mirrored; viscosity (eq. 9 with the solid's mu) on the full
+// relative velocity for bodies (no_slip = 1) and on its component along the pair direction
+// only for walls (no_slip = 0), which damps bouncing without making walls sticky.
 void solid_run(samplerBuffer sa, samplerBuffer sb, uint b, uint e, bool have_c, samplerBuffer sc) {
   for (uint j = b; j < e; ++j) {
     vec4 pj = texelFetch(sa, int(j));
@@ -35,14 +36,16 @@ void solid_run(samplerBuffer sa, samplerBuffer sb, uint b, uint e, bool have_c, 
     float r2 = dx * dx + dy * dy + dz * dz;
     if (r2 >= h2() || r2 <= 0.0) continue;
     vec4 vj = texelFetch(sb, int(j));
-    float no_slip = have_c ? texelFetch(sc, int(j)).x : 1.0;
+    float ns = have_c ? texelFetch(sc, int(j)).x : 1.0;
     float r = sqrt(r2);
     float hr = h() - r;
     float pterm = -pj.w * (pi_ + pi_) * P.kernel.w * hr * hr / r;
-    float vterm = no_slip * pj.w * 0.5 * (mui + vj.w) * P.material.x * hr;
-    a.x += pterm * dx + vterm * (vj.x - vi.x);
-    a.y += pterm * dy + vterm * (vj.y - vi.y);
-    a.z += pterm * dz + vterm * (vj.z - vi.z);
+    float vterm = pj.w * 0.5 * (mui + vj.w) * P.material.x * hr;
+    float dvx = vj.x - vi.x, dvy = vj.y - vi.y, dvz = vj.z - vi.z;
+    float along = (1.0 - ns) * (dvx * dx + dvy * dy + dvz * dz) / r2;
+    a.x += pterm * dx + vterm * (ns * dvx + along * dx);
+    a.y += pterm * dy + vterm * (ns * dvy + along * dy);
+    a.z += pterm * dz + vterm * (ns * dvz + along * dz);
   }
 }
 
