@@ -453,7 +453,7 @@ void VulkanSolver::submit_and_wait(VkCommandBuffer cb) {
 
 void VulkanSolver::read_results(int substeps) {
   const std::uint32_t* reduce = static_cast<const std::uint32_t*>(b_->reduce.mapped());
-  clamped_ = reduce[0];
+  clamped_ += reduce[0];  // cumulative, as CpuSolver::clamped_particle_count
   std::memcpy(&max_speed2_, &reduce[1], sizeof(float));
   std::memcpy(&max_accel2_, &reduce[2], sizeof(float));
   if (queries_ && substeps > 0 && timed(substeps)) {

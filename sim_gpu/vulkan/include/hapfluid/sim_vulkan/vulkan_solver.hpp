@@ -63,6 +63,7 @@ class VulkanSolver {
   const SimulationParams& params() const { return m_.params; }
   double time_s() const { return time_s_; }
   std::uint64_t steps() const { return steps_; }
+  // Fluid particles the domain-box clamp put back, summed over all steps (as CpuSolver).
   std::uint64_t clamped_particle_count() const { return clamped_; }
   const DeviceDescription& device() const { return context_->description(); }
   const Context& context() const { return *context_; }
