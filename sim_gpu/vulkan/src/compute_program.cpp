@@ -22,7 +22,8 @@ VkDescriptorType binding_type(std::uint32_t binding) {
 
 constexpr const char* kPassShaders[] = {
     "hash", "hash_bodies", "scan_local", "scan_blocks", "scan_add", "scatter", "order_cells", "gather_fluid",
-    "gather_bodies", "density", "body_contact_pressure", "fluid_forces", "body_forces", "body_sums", "body_sums_final",
+    "gather_bodies", "density_cells", "body_contact_pressure", "fluid_forces_cells", "body_forces", "body_sums",
+    "body_sums_final",
     "body_update", "integrate_fluid", "max_speed", "max_speed_final"};
 static_assert(sizeof(kPassShaders) / sizeof(kPassShaders[0]) == static_cast<int>(Pass::count));
 

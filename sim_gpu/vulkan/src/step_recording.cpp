@@ -91,11 +91,11 @@ void VulkanSolver::record_body_step(VkCommandBuffer head, VkCommandBuffer tail) 
   record_sort(head);
   record_body_sort(head);
   stamp(head);
-  p.dispatch(head, Pass::density, groups(fluid_count_, 64));
+  p.dispatch(head, Pass::density_cells, groups(cell_count_, 64));
   p.dispatch(head, Pass::body_contact_pressure, groups(body_particle_count_, 64));
   compute_barrier(head);
   stamp(head);
-  p.dispatch(head, Pass::fluid_forces, groups(fluid_count_, 64));
+  p.dispatch(head, Pass::fluid_forces_cells, groups(cell_count_, 64));
   p.dispatch(head, Pass::body_forces, groups(body_particle_count_, 64));
   compute_barrier(head);
   stamp(head);
@@ -146,10 +146,10 @@ void VulkanSolver::record_steps(VkCommandBuffer cb, int substeps) {
   for (int s = 0; s < substeps; ++s) {
     record_sort(cb);
     stamp();
-    p.dispatch(cb, Pass::density, groups(fluid_count_, 64));
+    p.dispatch(cb, Pass::density_cells, groups(cell_count_, 64));
     compute_barrier(cb);
     stamp();
-    p.dispatch(cb, Pass::fluid_forces, groups(fluid_count_, 64));
+    p.dispatch(cb, Pass::fluid_forces_cells, groups(cell_count_, 64));
     compute_barrier(cb);
     stamp();
     p.dispatch(cb, Pass::integrate_fluid, groups(fluid_count_, 64));
