@@ -244,7 +244,8 @@ void VulkanSolver::upload_model() {
   // Accelerations of the initial state enter the first CFL bound; S_ACC holds them.
   b.s_acc.upload(pack4(nf, f.ax.data(), f.ay.data(), f.az.data(), nullptr).data(), 16 * nf);
   b.s_density.upload(pack4(nf, f.density.data(), f.pressure.data(), f.volume.data(), nullptr).data(), 16 * nf);
-  const std::vector<std::uint32_t> zeros(body_start_base_ + cell_count_ + 1, 0);
+  const std::vector<std::uint32_t> zeros(std::max<std::size_t>(body_start_base_ + cell_count_ + 1, 4 + 2 * max_groups_), 0);
+  b.reduce.upload(zeros.data(), 4 * (4 + 2 * max_groups_));  // the clamp counter starts at zero
   b.cell_count.upload(zeros.data(), 4 * 2 * cell_count_);
   b.cell_start.upload(zeros.data(), 4 * zeros.size());
 
