@@ -342,8 +342,9 @@ void CpuSolver::step_bodies(double dt) {
 }
 
 // Leap-frog (Algorithm 1, lines 13-16): v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.
-// Last resort: a particle that ends outside the domain box is put back on it (counted; the walls
-// alone must hold the fluid in every validation scene, where the count stays zero).
+// Last resort: a particle that reaches a wall's first particle layer (or leaves the box on an
+// open side) is put back (counted; the walls alone must hold the fluid in every validation
+// scene, where the count stays zero).
 void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int worker, float dt) {
   FluidParticles& f = m_.fluid;
   const SimulationParams& p = m_.params;
@@ -356,10 +357,10 @@ void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int worker, 
     for (int a = 0; a < 3; ++a) {
       float v = vel[a][i] + acc[a][i] * dt;
       float x = pos[a][i] + v * dt;
-      if (x < p.box_lo[a]) {
-        x = p.box_lo[a], v = v < 0 ? 0 : v, out = true;
-      } else if (x > p.box_hi[a]) {
-        x = p.box_hi[a], v = v > 0 ? 0 : v, out = true;
+      if (x < p.clamp_lo[a]) {
+        x = p.clamp_lo[a], v = v < 0 ? 0 : v, out = true;
+      } else if (x > p.clamp_hi[a]) {
+        x = p.clamp_hi[a], v = v > 0 ? 0 : v, out = true;
       }
       vel[a][i] = v;
       pos[a][i] = x;
