@@ -34,7 +34,7 @@ config::Scene pool_scene(const std::filesystem::path& dir, int pool_particles, i
   const double s = std::cbrt(0.25 / pool_particles);
   const double depth = fluid_target * s * s * s;
   std::ostringstream t;
-  t << "name = \"pool\"\n[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, 0.4]\n"
+  t << "name = \"pool\"\n[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, 0.5]\n"
     << "[fluid]\nparticle_spacing_m = " << s << "\nspeed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n"
     << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, " << depth << "]\n";
   for (std::size_t i = 0; i < bodies.size(); ++i) {
