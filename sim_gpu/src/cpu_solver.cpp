@@ -38,6 +38,12 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
   worker_max_accel_.assign(threads, 0);
   worker_clamped_.assign(threads, 0);
   neighbour_lists_.resize(threads);
+  // Density and pressure of the initial state, so that a frame exported before the first step
+  // shows them (the step recomputes them from the same positions).
+  sort_fluid();
+  if (m_.body_particles.size() > 0) build_body_view();
+  neighbour_ranges_.resize(m_.fluid.size());
+  pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_density(b, e, w); });
   // Body particle velocities at start (eq. 14 with the initial body velocities).
   for (const RigidBody& body : m_.bodies) {
     if (!body.dynamic) continue;

@@ -239,13 +239,11 @@ SimulationModel build_model(const config::Scene& scene) {
     }
     all_solid_world.insert(all_solid_world.end(), world.begin(), world.end());
     PlacedMesh pm{mesh, scaled_vertices(mesh, cb.scale), origin, q, {}, {}};
-    pm.lo = {1e300, 1e300, 1e300};
-    pm.hi = {-1e300, -1e300, -1e300};
-    for (const Vec3& v : pm.vertices)
-      for (int a = 0; a < 3; ++a) {
-        (a == 0 ? pm.lo.x : a == 1 ? pm.lo.y : pm.lo.z) = std::min(pm.lo[a], v[a]);
-        (a == 0 ? pm.hi.x : a == 1 ? pm.hi.y : pm.hi.z) = std::max(pm.hi[a], v[a]);
-      }
+    pm.lo = pm.hi = pm.vertices.front();
+    for (const Vec3& v : pm.vertices) {
+      pm.lo = {std::min(pm.lo.x, v.x), std::min(pm.lo.y, v.y), std::min(pm.lo.z, v.z)};
+      pm.hi = {std::max(pm.hi.x, v.x), std::max(pm.hi.y, v.y), std::max(pm.hi.z, v.z)};
+    }
     placed.push_back(std::move(pm));
     model.bodies.push_back(std::move(body));
   }

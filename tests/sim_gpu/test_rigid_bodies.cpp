@@ -299,3 +299,43 @@ cfl = 0.2
   EXPECT_GT(norm(solver.model().couplings[0].device_force), 0.0);
   std::filesystem::remove_all(dir);
 }
+
+TEST(Coupling, TwoDevicesHoldingOneBarShareItsWeight) {
+  // Bimanual coupling (§6.4.4): two devices hold a 0.3 m bar at its ends. At rest each device
+  // feels half the bar's weight, pulling down (N).
+  const auto dir = test::temp_dir("bimanual");
+  const auto scene = test::write_scene(dir, "name = \"bar\"\n" + domain(0, 0, 0, 0.5, 0.2, 0.3) + R"(
+[fluid]
+particle_spacing_m = 0.01
+speed_of_sound_m_s = 10.0
+[[bodies]]
+name = "bar"
+mesh = "bar.obj"
+position_m = [0.1, 0.08, 0.15]
+density_kg_m3 = 2000.0
+[[devices]]
+name = "left"
+start_position_m = [0.11, 0.1, 0.17]
+[[devices]]
+name = "right"
+start_position_m = [0.39, 0.1, 0.17]
+[[couplings]]
+device = "left"
+body = "bar"
+grasp_position_m = [0.01, 0.02, 0.02]
+[[couplings]]
+device = "right"
+body = "bar"
+grasp_position_m = [0.29, 0.02, 0.02]
+)", {{"bar.obj", test::box_mesh(0.3, 0.04, 0.04)}});
+  CpuSolver solver(build_model(scene), 1);
+  test::run_for(solver, 1.5, 0.02);
+  const RigidBody& bar = solver.model().bodies[0];
+  const double weight = bar.mass_kg * kG;
+  EXPECT_NEAR(bar.mass_kg, 2000.0 * 0.3 * 0.04 * 0.04, 1e-9);
+  for (const auto& c : solver.model().couplings) {
+    EXPECT_NEAR(c.device_force.z, -0.5 * weight, 0.03 * weight);
+    EXPECT_NEAR(c.device_force.x, 0.0, 0.03 * weight);
+  }
+  std::filesystem::remove_all(dir);
+}
