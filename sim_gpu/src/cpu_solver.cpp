@@ -6,24 +6,14 @@
 #include <stdexcept>
 #include <string>
 
+#include "sph_passes.hpp"
+
 namespace hapfluid::sim {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Sum over a run of d^3 with d = max(h^2 - r^2, 0) (the poly6 shape), optionally weighted.
-inline float poly6_run(const float* x, const float* y, const float* z, std::uint32_t b, std::uint32_t e, float xi,
-                       float yi, float zi, float h2) {
-  float sum = 0;
-  for (std::uint32_t j = b; j < e; ++j) {
-    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-    float d = h2 - (dx * dx + dy * dy + dz * dz);
-    d = d > 0 ? d : 0;
-    sum += d * d * d;
-  }
-  return sum;
-}
 inline float poly6_run_weighted(const float* x, const float* y, const float* z, const float* w, std::uint32_t b,
                                 std::uint32_t e, float xi, float yi, float zi, float h2) {
   float sum = 0;
@@ -47,6 +37,13 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
   worker_max_speed_.assign(threads, 0);
   worker_max_accel_.assign(threads, 0);
   worker_clamped_.assign(threads, 0);
+  neighbour_lists_.resize(threads);
+  // Density and pressure of the initial state, so that a frame exported before the first step
+  // shows them (the step recomputes them from the same positions).
+  sort_fluid();
+  if (m_.body_particles.size() > 0) build_body_view();
+  neighbour_ranges_.resize(m_.fluid.size());
+  pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_density(b, e, w); });
   // Body particle velocities at start (eq. 14 with the initial body velocities).
   for (const RigidBody& body : m_.bodies) {
     if (!body.dynamic) continue;
@@ -120,33 +117,9 @@ void CpuSolver::build_body_view() {
 // Eq. 2 over fluid neighbours, plus the boundary contribution rho0 V_b W of wall and body
 // particles (Akinci et al. 2012), then eq. 7. Negative pressures are clamped to zero: a free
 // surface must not pull particles together (tensile instability).
-void CpuSolver::compute_density(std::size_t begin, std::size_t end) {
-  const SimulationParams& p = m_.params;
-  FluidParticles& f = m_.fluid;
-  const SortedSolids& st = m_.static_solids;
-  const SortedSolids& bv = body_view_;
-  const float h2 = p.kernel.h2, mass = p.fluid_particle_mass_kg, rho0 = p.rest_density_kg_m3;
-  const bool have_bodies = bv.size() > 0, have_static = st.size() > 0;
-  for (std::size_t i = begin; i < end; ++i) {
-    const float xi = f.x[i], yi = f.y[i], zi = f.z[i];
-    float fluid_sum = 0, solid_sum = 0;
-    for_each_neighbour_run(p.grid, fluid_sort_.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      fluid_sum += poly6_run(f.x.data(), f.y.data(), f.z.data(), b, e, xi, yi, zi, h2);
-    });
-    if (have_static)
-      for_each_neighbour_run(p.grid, st.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-        solid_sum += poly6_run_weighted(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), b, e, xi, yi, zi, h2);
-      });
-    if (have_bodies)
-      for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-        solid_sum += poly6_run_weighted(bv.x.data(), bv.y.data(), bv.z.data(), bv.volume.data(), b, e, xi, yi, zi, h2);
-      });
-    const float rho = p.kernel.poly6 * (mass * fluid_sum + rho0 * solid_sum);
-    f.density[i] = rho;
-    f.volume[i] = mass / rho;
-    const float pressure = p.stiffness * (rho - rho0);
-    f.pressure[i] = pressure > 0 ? pressure : 0;
-  }
+void CpuSolver::compute_density(std::size_t begin, std::size_t end, int worker) {
+  detail::density_pass(m_.params, m_.fluid, fluid_sort_.cell_start.data(), m_.static_solids, body_view_, begin, end,
+                       neighbour_lists_[worker], neighbour_ranges_.data());
 }
 
 // Rigid particles have constant density (§4.1); what they get here is the contact pressure
@@ -188,63 +161,8 @@ void CpuSolver::compute_body_contact_pressure(std::size_t begin, std::size_t end
 // would settle at twice the hydrostatic pressure. Wall and body particles take the fluid
 // particle's own pressure (pressure mirroring, Akinci et al. 2012); walls are free-slip.
 void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int worker) {
-  const SimulationParams& p = m_.params;
-  FluidParticles& f = m_.fluid;
-  const SortedSolids& st = m_.static_solids;
-  const SortedSolids& bv = body_view_;
-  const KernelConstants& k = p.kernel;
-  const float gx = static_cast<float>(p.gravity_m_s2.x), gy = static_cast<float>(p.gravity_m_s2.y),
-              gz = static_cast<float>(p.gravity_m_s2.z);
-  float max_accel2 = worker_max_accel_[worker];
-  for (std::size_t i = begin; i < end; ++i) {
-    const float xi = f.x[i], yi = f.y[i], zi = f.z[i];
-    const float vxi = f.vx[i], vyi = f.vy[i], vzi = f.vz[i];
-    const float pi = f.pressure[i], mui = f.viscosity[i];
-    float ax = 0, ay = 0, az = 0;
-    for_each_neighbour_run(p.grid, fluid_sort_.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t j = b; j < e; ++j) {
-        const float dx = xi - f.x[j], dy = yi - f.y[j], dz = zi - f.z[j];
-        const float r2 = dx * dx + dy * dy + dz * dz;
-        if (r2 >= k.h2 || r2 <= 0) continue;
-        const float r = std::sqrt(r2);
-        const float hr = k.h - r;
-        const float pterm = -f.volume[j] * (pi + f.pressure[j]) * k.spiky_grad * hr * hr / r;
-        const float vterm = f.volume[j] * 0.5f * (mui + f.viscosity[j]) * k.visc_lap * hr;
-        ax += pterm * dx + vterm * (f.vx[j] - vxi);
-        ay += pterm * dy + vterm * (f.vy[j] - vyi);
-        az += pterm * dz + vterm * (f.vz[j] - vzi);
-      }
-    });
-    auto solids = [&](const SortedSolids& s) {
-      for_each_neighbour_run(p.grid, s.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-        for (std::uint32_t j = b; j < e; ++j) {
-          const float dx = xi - s.x[j], dy = yi - s.y[j], dz = zi - s.z[j];
-          const float r2 = dx * dx + dy * dy + dz * dz;
-          if (r2 >= k.h2 || r2 <= 0) continue;
-          const float r = std::sqrt(r2);
-          const float hr = k.h - r;
-          const float pterm = -s.volume[j] * (pi + pi) * k.spiky_grad * hr * hr / r;
-          const float vterm = s.volume[j] * 0.5f * (mui + s.viscosity[j]) * k.visc_lap * hr;
-          // Walls (no_slip = 0) damp only the relative velocity along the pair direction: they
-          // stop fluid bouncing on them without the drag of a no-slip wall.
-          const float dvx = s.vx[j] - vxi, dvy = s.vy[j] - vyi, dvz = s.vz[j] - vzi;
-          const float along = (1.0f - s.no_slip[j]) * (dvx * dx + dvy * dy + dvz * dz) / r2;
-          const float ns = s.no_slip[j];
-          ax += pterm * dx + vterm * (ns * dvx + along * dx);
-          ay += pterm * dy + vterm * (ns * dvy + along * dy);
-          az += pterm * dz + vterm * (ns * dvz + along * dz);
-        }
-      });
-    };
-    if (st.size() > 0) solids(st);
-    if (bv.size() > 0) solids(bv);
-    const float inv_rho = 1.0f / f.density[i];  // a = f / m = (V_p / m_p) sum = sum / rho_p
-    f.ax[i] = ax * inv_rho + gx;
-    f.ay[i] = ay * inv_rho + gy;
-    f.az[i] = az * inv_rho + gz;
-    max_accel2 = std::max(max_accel2, f.ax[i] * f.ax[i] + f.ay[i] * f.ay[i] + f.az[i] * f.az[i]);
-  }
-  worker_max_accel_[worker] = max_accel2;
+  worker_max_accel_[worker] = detail::fluid_force_pass(m_.params, m_.fluid, m_.static_solids, body_view_, begin, end,
+                                                       neighbour_lists_[worker], neighbour_ranges_.data());
 }
 
 // Forces on the particles of dynamic bodies: from the fluid (f^haptic, eq. 8: the exact opposite
@@ -330,7 +248,8 @@ void CpuSolver::step_bodies(double dt) {
     body.fluid_force = ff, body.fluid_torque = ft, body.contact_force = cf, body.contact_torque = ct;
     integrate_body(body, couplings_of_body_[b], devices_, m_.params.gravity_m_s2, dt);
   }
-  pool_.parallel_for(m_.bodies.size() > 0 ? bp.size() : 0, [&](std::size_t begin, std::size_t end, int) {
+  if (bp.size() == 0) return;
+  pool_.parallel_for(bp.size(), [&](std::size_t begin, std::size_t end, int) {
     for (std::size_t i = begin; i < end; ++i) {
       const RigidBody& body = m_.bodies[bp.body[i]];
       const Vec3 world = body.position + rotate(body.orientation, Vec3{bp.rx[i], bp.ry[i], bp.rz[i]});
@@ -342,8 +261,9 @@ void CpuSolver::step_bodies(double dt) {
 }
 
 // Leap-frog (Algorithm 1, lines 13-16): v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.
-// Last resort: a particle that ends outside the domain box is put back on it (counted; the walls
-// alone must hold the fluid in every validation scene, where the count stays zero).
+// Last resort: a particle that reaches a wall's first particle layer (or leaves the box on an
+// open side) is put back (counted; the walls alone must hold the fluid in every validation
+// scene, where the count stays zero).
 void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int worker, float dt) {
   FluidParticles& f = m_.fluid;
   const SimulationParams& p = m_.params;
@@ -356,10 +276,10 @@ void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int worker, 
     for (int a = 0; a < 3; ++a) {
       float v = vel[a][i] + acc[a][i] * dt;
       float x = pos[a][i] + v * dt;
-      if (x < p.box_lo[a]) {
-        x = p.box_lo[a], v = v < 0 ? 0 : v, out = true;
-      } else if (x > p.box_hi[a]) {
-        x = p.box_hi[a], v = v > 0 ? 0 : v, out = true;
+      if (x < p.clamp_lo[a]) {
+        x = p.clamp_lo[a], v = v < 0 ? 0 : v, out = true;
+      } else if (x > p.clamp_hi[a]) {
+        x = p.clamp_hi[a], v = v > 0 ? 0 : v, out = true;
       }
       vel[a][i] = v;
       pos[a][i] = x;
@@ -378,7 +298,8 @@ void CpuSolver::step(double dt) {
   times_.neighbour_search_s += seconds_since(t0);
 
   t0 = Clock::now();
-  pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int) { compute_density(b, e); });
+  neighbour_ranges_.resize(m_.fluid.size());
+  pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_density(b, e, w); });
   if (body_view_.size() > 0)
     pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) { compute_body_contact_pressure(b, e); });
   times_.density_s += seconds_since(t0);

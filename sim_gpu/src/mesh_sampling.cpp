@@ -100,20 +100,38 @@ struct CellHash {
 
 }  // namespace
 
-std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale, double spacing_m) {
+std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale, double spacing_m, double inset_m) {
   const std::vector<Vec3> v = scaled_vertices(mesh, scale);
-  // Candidates: mesh vertices first (corners and rims are kept), then a barycentric lattice on
-  // every triangle fine enough (a quarter of the spacing) that thinning leaves no hole.
-  std::vector<Vec3> candidates(v.begin(), v.end());
-  const double fine = spacing_m / 4;
+  // Outward unit normals: per face, and area-weighted per vertex.
+  std::vector<Vec3> vertex_normal(v.size());
+  std::vector<Vec3> face_normal;
+  face_normal.reserve(mesh.triangles.size());
   for (const auto& t : mesh.triangles) {
+    const Vec3 n = cross(v[t[1]] - v[t[0]], v[t[2]] - v[t[0]]);
+    for (int c = 0; c < 3; ++c) vertex_normal[t[c]] += n;
+    const double len = norm(n);
+    face_normal.push_back(len > 0 ? n * (1 / len) : Vec3{});
+  }
+  for (Vec3& n : vertex_normal) {
+    const double len = norm(n);
+    if (len > 0) n = n * (1 / len);
+  }
+  // Candidates: mesh vertices first (corners and rims are kept), then a barycentric lattice on
+  // every triangle fine enough (a quarter of the spacing) that thinning leaves no hole. Each is
+  // moved inset_m inward along its normal.
+  std::vector<Vec3> candidates;
+  candidates.reserve(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) candidates.push_back(v[i] - vertex_normal[i] * inset_m);
+  const double fine = spacing_m / 4;
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
     const Vec3 &a = v[t[0]], &b = v[t[1]], &c = v[t[2]];
     const double longest = std::max({norm(b - a), norm(c - b), norm(a - c)});
     const int n = std::max(1, static_cast<int>(std::ceil(longest / fine)));
     for (int i = 0; i <= n; ++i)
       for (int j = 0; i + j <= n; ++j) {
         const double u = static_cast<double>(i) / n, w = static_cast<double>(j) / n;
-        candidates.push_back(a + (b - a) * u + (c - a) * w);
+        candidates.push_back(a + (b - a) * u + (c - a) * w - face_normal[f] * inset_m);
       }
   }
   // Greedy thinning: accept a candidate when no accepted sample lies within 0.8 spacing. A

@@ -136,6 +136,12 @@ SimulationModel build_model(const config::Scene& scene) {
     ghi[a] = static_cast<float>(hi[a] + margin);
   }
   p.grid = make_grid(glo, ghi, static_cast<float>(h));
+  const auto& w = scene.domain.walls;
+  const bool low_wall[3] = {w.x_min, w.y_min, w.floor}, high_wall[3] = {w.x_max, w.y_max, w.ceiling};
+  for (int a = 0; a < 3; ++a) {
+    p.clamp_lo[a] = static_cast<float>(low_wall[a] ? lo[a] - 0.5 * s : lo[a]);
+    p.clamp_hi[a] = static_cast<float>(high_wall[a] ? hi[a] + 0.5 * s : hi[a]);
+  }
   p.fixed_dt_s = scene.time.dt_s;
   p.cfl = scene.time.cfl;
   p.max_dt_s = scene.time.max_dt_s;
@@ -156,10 +162,9 @@ SimulationModel build_model(const config::Scene& scene) {
       walls.volumes = boundary_volumes(walls.positions, p.kernel);
     walls.body = kWall;
     walls.viscosity = p.fluid_viscosity_pa_s;
-    // Walls take part in eq. 9 with the fluid's viscosity, on the normal relative velocity only
-    // (no_slip = 0): without it nothing damps the fluid bouncing on a wall, and full no-slip
-    // walls would add bed and side-wall drag the dam-break experiments do not have.
-    walls.no_slip = 0;
+    // Walls take part in eq. 9 with the fluid's viscosity like any other particle: without it
+    // nothing damps the fluid's motion relative to the walls and a column at rest keeps moving.
+    walls.no_slip = 1;
     model.wall_particle_count = walls.positions.size();
     static_sources.push_back(std::move(walls));
   }
@@ -178,7 +183,7 @@ SimulationModel build_model(const config::Scene& scene) {
       fail(scene, "bodies." + cb.name + ": sampling spacing " + fmt(spacing) + " m is larger than the support radius h = " +
                       fmt(h) + " m: fluid would leak between the body's particles; use sampling_spacing_m <= " + fmt(h));
     const MassProperties mp = mass_properties(mesh, cb.scale);
-    const std::vector<Vec3> samples = sample_surface(mesh, cb.scale, spacing);
+    const std::vector<Vec3> samples = sample_surface(mesh, cb.scale, spacing, 0.5 * spacing);
     const config::Aabb bounds = config::transformed_bounds(mesh, cb.scale, config::Pose{});
     const double extent = std::max({bounds.max_m.x - bounds.min_m.x, bounds.max_m.y - bounds.min_m.y,
                                     bounds.max_m.z - bounds.min_m.z});
@@ -234,13 +239,11 @@ SimulationModel build_model(const config::Scene& scene) {
     }
     all_solid_world.insert(all_solid_world.end(), world.begin(), world.end());
     PlacedMesh pm{mesh, scaled_vertices(mesh, cb.scale), origin, q, {}, {}};
-    pm.lo = {1e300, 1e300, 1e300};
-    pm.hi = {-1e300, -1e300, -1e300};
-    for (const Vec3& v : pm.vertices)
-      for (int a = 0; a < 3; ++a) {
-        (a == 0 ? pm.lo.x : a == 1 ? pm.lo.y : pm.lo.z) = std::min(pm.lo[a], v[a]);
-        (a == 0 ? pm.hi.x : a == 1 ? pm.hi.y : pm.hi.z) = std::max(pm.hi[a], v[a]);
-      }
+    pm.lo = pm.hi = pm.vertices.front();
+    for (const Vec3& v : pm.vertices) {
+      pm.lo = {std::min(pm.lo.x, v.x), std::min(pm.lo.y, v.y), std::min(pm.lo.z, v.z)};
+      pm.hi = {std::max(pm.hi.x, v.x), std::max(pm.hi.y, v.y), std::max(pm.hi.z, v.z)};
+    }
     placed.push_back(std::move(pm));
     model.bodies.push_back(std::move(body));
   }

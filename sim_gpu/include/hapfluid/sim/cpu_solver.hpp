@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/neighbour_lists.hpp"
 #include "hapfluid/sim/thread_pool.hpp"
 
 namespace hapfluid::sim {
@@ -56,7 +57,7 @@ class CpuSolver {
  private:
   void sort_fluid();
   void build_body_view();
-  void compute_density(std::size_t begin, std::size_t end);
+  void compute_density(std::size_t begin, std::size_t end, int worker);
   void compute_body_contact_pressure(std::size_t begin, std::size_t end);
   void compute_fluid_forces(std::size_t begin, std::size_t end, int worker);
   void compute_body_particle_forces(std::size_t begin, std::size_t end);
@@ -71,6 +72,8 @@ class CpuSolver {
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
   std::vector<float> worker_max_speed_, worker_max_accel_;
   std::vector<std::uint64_t> worker_clamped_;
+  std::vector<detail::NeighbourLists> neighbour_lists_;  // one per worker
+  std::vector<detail::NeighbourRange> neighbour_ranges_;  // one per fluid particle
   double time_s_ = 0;
   std::uint64_t steps_ = 0;
   std::uint64_t clamped_ = 0;

@@ -31,7 +31,11 @@ inline constexpr double kSampleRadiusFactor = 0.8;
 // Points on the surface with no two closer than 0.8 spacing_m and no surface point farther than
 // that from a sample (greedy Poisson-disk thinning of a fine barycentric lattice; the
 // candidate order is fixed, so the result is deterministic). Mesh frame, scaled.
-std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale, double spacing_m);
+// inset_m moves the samples inward along the surface normal: boundary particles half a spacing
+// inside the surface put the fluid's effective boundary on the mesh surface itself (fluid
+// particles keep about half a spacing from boundary particles, as they do from each other),
+// so a body displaces its true volume (Archimedes) and a container holds its true capacity.
+std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale, double spacing_m, double inset_m = 0);
 
 // Inside test for a closed mesh (parity of crossings of a ray), scaled mesh frame.
 bool inside_closed_mesh(const std::vector<Vec3>& vertices, const config::TriangleMesh& mesh, const Vec3& p);

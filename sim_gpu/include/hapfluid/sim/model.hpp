@@ -25,7 +25,10 @@ struct SimulationParams {
   float particle_spacing_m = 0;
   float fluid_viscosity_pa_s = 0;
   Vec3 gravity_m_s2;
-  float box_lo[3] = {0, 0, 0}, box_hi[3] = {0, 0, 0};  // the domain box fluid stays in
+  float box_lo[3] = {0, 0, 0}, box_hi[3] = {0, 0, 0};  // the domain box
+  // Last-resort clamp for fluid positions: the first wall layer (half a spacing behind the face)
+  // on walled sides (reaching it is a leak), the box face on open sides.
+  float clamp_lo[3] = {0, 0, 0}, clamp_hi[3] = {0, 0, 0};
   GridGeometry grid;
   double fixed_dt_s = 0;          // 0: CFL
   double cfl = 0.4;
