@@ -8,8 +8,8 @@ layout(std140, set = 0, binding = BINDING_PARAMS) uniform Params {
   vec4 kernel;        // h, h^2, poly6 constant, spiky gradient constant
   vec4 material;      // viscosity Laplacian constant, fluid particle mass, rho0, stiffness k
   vec4 gravity_dt;    // gravity (m/s^2), dt (s)
-  vec4 box_lo;        // the domain box the fluid is clamped into (last resort)
-  vec4 box_hi;
+  vec4 clamp_lo;      // last-resort clamp of fluid positions: the first wall layer on walled
+  vec4 clamp_hi;      // sides, the box face on open sides (SimulationParams::clamp_lo/hi)
   vec4 grid_origin;   // min corner (m), cell size (m)
   ivec4 grid_dims;    // cells along x, y, z; cell count
   uvec4 counts;       // fluid, static solid, body particles; dynamic bodies

@@ -2,7 +2,8 @@
 #extension GL_GOOGLE_include_directive : require
 // Leap-frog (Algorithm 1, lines 13-16): v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt,
 // written back to the persistent arrays in this step's cell order. Last resort, as on the CPU:
-// a particle that ends outside the domain box is put back on it and counted.
+// a particle that reaches a wall's first particle layer (or leaves the box on an open side) is
+// put back and counted.
 #include "common.glsl"
 layout(local_size_x = 64) in;
 layout(std430, binding = BINDING_S_POS) readonly buffer SPos { vec4 s_pos[]; };
@@ -25,10 +26,10 @@ void main() {
   for (int axis = 0; axis < 3; ++axis) {
     float vn = v[axis] + acc[axis] * dt;
     float xn = x[axis] + vn * dt;
-    if (xn < P.box_lo[axis]) {
-      xn = P.box_lo[axis]; vn = vn < 0.0 ? 0.0 : vn; out_of_box = true;
-    } else if (xn > P.box_hi[axis]) {
-      xn = P.box_hi[axis]; vn = vn > 0.0 ? 0.0 : vn; out_of_box = true;
+    if (xn < P.clamp_lo[axis]) {
+      xn = P.clamp_lo[axis]; vn = vn < 0.0 ? 0.0 : vn; out_of_box = true;
+    } else if (xn > P.clamp_hi[axis]) {
+      xn = P.clamp_hi[axis]; vn = vn > 0.0 ? 0.0 : vn; out_of_box = true;
     }
     v[axis] = vn;
     x[axis] = xn;

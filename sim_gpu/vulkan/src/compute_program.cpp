@@ -24,7 +24,7 @@ constexpr const char* kPassShaders[] = {
     "hash", "hash_bodies", "scan_local", "scan_blocks", "scan_add", "scatter", "order_cells", "gather_fluid",
     "gather_bodies", "density_cells", "body_contact_pressure", "fluid_forces_cells", "body_forces", "body_sums",
     "body_sums_final",
-    "body_update", "integrate_fluid", "max_speed", "max_speed_final"};
+    "body_update", "integrate_fluid", "adopt_sorted", "max_speed", "max_speed_final"};
 static_assert(sizeof(kPassShaders) / sizeof(kPassShaders[0]) == static_cast<int>(Pass::count));
 
 }  // namespace

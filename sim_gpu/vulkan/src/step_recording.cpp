@@ -143,6 +143,16 @@ void VulkanSolver::record_steps(VkCommandBuffer cb, int substeps) {
   host_to_compute_barrier(cb);
   stamp();
   const ComputeProgram& p = *program_;
+  if (substeps == 0) {
+    // The initial state (as CpuSolver's constructor): particles in cell order with their
+    // density and pressure, for a frame exported before the first step.
+    record_sort(cb);
+    if (body_particle_count_ > 0) record_body_sort(cb);
+    p.dispatch(cb, Pass::density_cells, groups(cell_count_, 64));
+    compute_barrier(cb);
+    p.dispatch(cb, Pass::adopt_sorted, groups(fluid_count_, 64));
+    compute_barrier(cb);
+  }
   for (int s = 0; s < substeps; ++s) {
     record_sort(cb);
     stamp();

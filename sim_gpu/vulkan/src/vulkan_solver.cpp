@@ -16,8 +16,8 @@ struct ParamsBlock {
   float kernel[4];       // h, h^2, poly6, spiky gradient
   float material[4];     // viscosity Laplacian, particle mass, rho0, stiffness
   float gravity_dt[4];
-  float box_lo[4];
-  float box_hi[4];
+  float clamp_lo[4];
+  float clamp_hi[4];
   float grid_origin[4];  // origin, cell size
   std::int32_t grid_dims[4];
   std::uint32_t counts[4];  // fluid, static solids, body particles, bodies
@@ -329,7 +329,7 @@ void VulkanSolver::write_params(float dt) {
   block.gravity_dt[0] = static_cast<float>(p.gravity_m_s2.x), block.gravity_dt[1] = static_cast<float>(p.gravity_m_s2.y);
   block.gravity_dt[2] = static_cast<float>(p.gravity_m_s2.z), block.gravity_dt[3] = dt;
   for (int a = 0; a < 3; ++a) {
-    block.box_lo[a] = p.box_lo[a], block.box_hi[a] = p.box_hi[a];
+    block.clamp_lo[a] = p.clamp_lo[a], block.clamp_hi[a] = p.clamp_hi[a];
     block.grid_origin[a] = p.grid.origin[a];
     block.grid_dims[a] = p.grid.dims[a];
   }

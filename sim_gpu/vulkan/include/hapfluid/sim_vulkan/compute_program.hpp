@@ -25,7 +25,7 @@ const std::vector<ShaderModuleCode>& builtin_shaders();
 enum class Pass : int {
   hash_fluid, hash_bodies, scan_local, scan_blocks, scan_add, scatter, order_cells, gather_fluid,
   gather_bodies, density_cells, body_contact_pressure, fluid_forces_cells, body_forces, body_sums, body_sums_final,
-  body_update, integrate_fluid, max_speed, max_speed_final, count
+  body_update, integrate_fluid, adopt_sorted, max_speed, max_speed_final, count
 };
 const char* pass_shader_name(Pass pass);
 
