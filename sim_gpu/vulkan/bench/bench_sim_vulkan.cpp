@@ -1,131 +1,113 @@
-// bench_sim_vulkan: steps per second of the Vulkan backend, with the per-pass GPU split
-// (timestamp queries), on the paper's benchmark scenes:
-//  - the fluid pool of §6.2.1 at about 8k, 16k, 32k and 64k fluid particles, each also run on
-//    the CPU backend (2 threads) in the same process for the ratio the issue asks for;
-//  - fig. 6b: a 25k-particle pool with one rigid sphere of 1k..20k particles;
-//  - fig. 6c: the same pool with 1..16 rigid spheres of ~1k particles.
-//   bench_sim_vulkan --out FILE.json [--quick] [--seconds S] [--sizes 26,40] [--validation]
-// Records: {"bench": "sim_vulkan", "params": {"backend": "vulkan", "scene", "particles",
-// "body_particles", "bodies", "device"}, "metrics": {"steps_per_s", "ms_per_step",
-// "particle_steps_per_s", "<pass>_ms", and for the pools "cpu_ms_per_step", "vulkan_over_cpu"}}.
+// bench_sim_vulkan: steps per second of the Vulkan backend on the scenes of bench_sim_cpu (same
+// definitions, so `make bench` puts the two backends side by side), with the per-pass GPU split
+// from timestamp queries:
+//  - pool (§6.2.1, fig. 6a): a 1 x 1 m pool 0.25 m deep at ~8k, 16k, 32k, 64k particles; each
+//    also timed on the CPU backend (2 threads) in this process for the ratio of issue 4;
+//  - fig6b: 25k particles, one floating sphere of 1k..20k particles;
+//  - fig6c: 25k particles with 1..16 spheres sharing 8k body particles.
+// Usage: bench_sim_vulkan --out FILE.json [--quick] [--validation]. Progress on stderr.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
-#include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/primitive_meshes.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 
-namespace hs = hapfluid::sim;
-namespace hv = hapfluid::sim::vulkan;
+using namespace hapfluid;
+using namespace hapfluid::sim;
 
 namespace {
 
-// A pool: a block of n x n x n/2 fluid particles (spacing 1 cm) at rest in a closed box twice
-// as high, as in the paper's fluid pool. h = 2 spacing, c = 15 m/s; `bodies` is appended.
-std::string pool_scene(const std::string& name, int n, const std::string& bodies = "") {
-  const double s = 0.01, side = n * s, depth = (n / 2) * s;
+struct Body { double x, y, z, radius, spacing; };
+
+// bench_sim_cpu's pool: `fluid_target` particles in a 1 x 1 m box, at the spacing that makes
+// the full pool (pool_particles) 0.25 m deep.
+config::Scene pool_scene(const std::filesystem::path& dir, int pool_particles, int fluid_target,
+                         const std::vector<Body>& bodies) {
+  const double s = std::cbrt(0.25 / pool_particles);
+  const double depth = fluid_target * s * s * s;
   std::ostringstream t;
-  t << "name = \"" << name << "\"\nduration_s = 1.0\n"
-    << "[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [" << side << ", " << side << ", " << 2 * depth << "]\n"
-    << "[fluid]\nparticle_spacing_m = " << s << "\nspeed_of_sound_m_s = 15.0\nviscosity_pa_s = 0.01\n"
-    << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [" << side << ", " << side << ", " << depth << "]\n"
-    << "[time]\ncfl = 0.4\nframe_rate_hz = 60.0\n"
-    << bodies;
-  return t.str();
-}
-
-// A floating sphere (config/meshes/sphere.obj, radius 0.05 m at scale 1) of density 500 kg/m^3.
-std::string sphere_body(const std::string& name, double x, double y, double z, double scale, double spacing) {
-  std::ostringstream t;
-  t << "[[bodies]]\nname = \"" << name << "\"\nmesh = \"" << HAPFLUID_SOURCE_DIR << "/config/meshes/sphere.obj\"\n"
-    << "scale = " << scale << "\nposition_m = [" << x << ", " << y << ", " << z << "]\ndensity_kg_m3 = 500.0\n"
-    << "sampling_spacing_m = " << spacing << "\n";
-  return t.str();
-}
-
-struct Record {
-  std::string scene, device;
-  std::size_t particles = 0, body_particles = 0, bodies = 0;
-  double steps_per_s = 0, ms_per_step = 0, cpu_ms_per_step = 0;
-  hv::PassTimes passes;
-};
-
-double cpu_ms_per_step(const hs::SimulationModel& model, double seconds) {
-  hs::CpuSolver solver(model, 2);
-  const double frame = 1.0 / solver.params().frame_rate_hz;
-  solver.advance(frame);
-  const std::uint64_t steps0 = solver.steps();
-  const auto t0 = std::chrono::steady_clock::now();
-  double wall = 0;
-  do {
-    solver.advance(frame);
-    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  } while (wall < seconds);
-  return 1000.0 * wall / static_cast<double>(solver.steps() - steps0);
-}
-
-Record run(const std::string& scene_text, double seconds, bool validation, bool with_cpu) {
-  const auto scene = hapfluid::config::parse_scene(scene_text, "bench_sim_vulkan scene");
-  const hs::SimulationModel model = hs::build_model(scene);
-  hv::VulkanSolverOptions options;
-  options.context.validation = validation;
-  hv::VulkanSolver solver(model, options);
-  const double frame = 1.0 / solver.params().frame_rate_hz;
-  solver.advance(frame);  // warm-up: pipelines, first sort of a fresh lattice
-  const hv::PassTimes before = solver.pass_times();
-  const std::uint64_t steps0 = solver.steps();
-  const auto t0 = std::chrono::steady_clock::now();
-  double wall = 0;
-  do {
-    solver.advance(frame);
-    wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  } while (wall < seconds);
-  Record r;
-  r.scene = scene.name;
-  r.device = solver.device().name;
-  r.particles = solver.model().fluid.size();
-  r.body_particles = solver.model().body_particles.size();
-  r.bodies = solver.model().bodies.size();
-  const double steps = static_cast<double>(solver.steps() - steps0);
-  r.steps_per_s = steps / wall;
-  r.ms_per_step = 1000.0 * wall / steps;
-  const hv::PassTimes& after = solver.pass_times();
-  r.passes.sort_s = (after.sort_s - before.sort_s) / steps;
-  r.passes.density_s = (after.density_s - before.density_s) / steps;
-  r.passes.forces_s = (after.forces_s - before.forces_s) / steps;
-  r.passes.integration_s = (after.integration_s - before.integration_s) / steps;
-  r.passes.reductions_s = (after.reductions_s - before.reductions_s) / steps;
-  r.passes.bodies_s = (after.bodies_s - before.bodies_s) / steps;
-  if (with_cpu) r.cpu_ms_per_step = cpu_ms_per_step(model, seconds);
-  return r;
-}
-
-std::string json(const std::vector<Record>& records) {
-  std::ostringstream j;
-  j << "[\n";
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    const Record& r = records[i];
-    j << "  {\"bench\": \"sim_vulkan\", \"params\": {\"backend\": \"vulkan\", \"scene\": \"" << r.scene
-      << "\", \"particles\": " << r.particles << ", \"body_particles\": " << r.body_particles
-      << ", \"bodies\": " << r.bodies << ", \"device\": \"" << r.device << "\"}, \"metrics\": {"
-      << "\"steps_per_s\": " << r.steps_per_s << ", \"ms_per_step\": " << r.ms_per_step
-      << ", \"particle_steps_per_s\": " << r.steps_per_s * static_cast<double>(r.particles)
-      << ", \"sort_ms\": " << 1000 * r.passes.sort_s << ", \"density_ms\": " << 1000 * r.passes.density_s
-      << ", \"forces_ms\": " << 1000 * r.passes.forces_s << ", \"integration_ms\": " << 1000 * r.passes.integration_s
-      << ", \"bodies_ms\": " << 1000 * r.passes.bodies_s << ", \"reductions_ms\": " << 1000 * r.passes.reductions_s;
-    if (r.cpu_ms_per_step > 0)
-      j << ", \"cpu_ms_per_step\": " << r.cpu_ms_per_step << ", \"vulkan_over_cpu\": " << r.ms_per_step / r.cpu_ms_per_step;
-    j << "}}" << (i + 1 < records.size() ? "," : "") << "\n";
+  t << "name = \"pool\"\n[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, 0.5]\n"
+    << "[fluid]\nparticle_spacing_m = " << s << "\nspeed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n"
+    << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, " << depth << "]\n";
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    config::save_obj(primitives::sphere_mesh(bodies[i].radius, 4), dir / ("sphere" + std::to_string(i) + ".obj"));
+    t << "[[bodies]]\nname = \"sphere" << i << "\"\nmesh = \"sphere" << i << ".obj\"\nposition_m = [" << bodies[i].x << ", "
+      << bodies[i].y << ", " << bodies[i].z << "]\ndensity_kg_m3 = 500.0\nsampling_spacing_m = " << bodies[i].spacing << "\n";
   }
-  j << "]\n";
-  return j.str();
+  std::ofstream(dir / "scene.toml") << t.str();
+  return config::load_scene(dir / "scene.toml");
+}
+
+// Surface spacing that gives about n particles on a sphere of radius r.
+double spacing_for(int n, double r) { return std::sqrt(4 * 3.14159265 * r * r / n); }
+
+std::vector<std::string> records;
+
+double cpu_ms_per_step(const SimulationModel& model, int steps) {
+  CpuSolver solver(model, 2);
+  const double dt = solver.stable_time_step();
+  for (int i = 0; i < 3; ++i) solver.step(dt);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) solver.step(dt);
+  return 1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps;
+}
+
+void measure(const std::string& sweep, const config::Scene& scene, int steps, bool validation, bool with_cpu,
+             const std::string& extra_params) {
+  const SimulationModel model = build_model(scene);
+  vulkan::VulkanSolverOptions options;
+  options.context.validation = validation;
+  vulkan::VulkanSolver solver(model, options);
+  const double dt = solver.stable_time_step();
+  solver.step_many(dt, 3);  // warm-up: first touches of every buffer
+  const vulkan::PassTimes before = solver.pass_times();
+  const auto t0 = std::chrono::steady_clock::now();
+  // The steps of a published frame go in one submission (fluid-only scenes; with bodies every
+  // step is two submissions around the host's body integration).
+  solver.step_many(dt, steps);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const vulkan::PassTimes& after = solver.pass_times();
+  const auto& m = solver.model();
+  const std::size_t fluid = m.fluid.size(), body = m.body_particles.size();
+  const double ms = 1000 * wall / steps;
+  auto pass = [&](double a, double b) { return 1000 * (a - b) / steps; };
+  const double cpu_ms = with_cpu ? cpu_ms_per_step(model, steps) : 0;
+  char buf[1400];
+  std::snprintf(buf, sizeof buf,
+                "{\"bench\": \"bench_sim_vulkan\", \"params\": {\"backend\": \"vulkan\", \"sweep\": \"%s\", \"particles\": %zu, "
+                "\"fluid_particles\": %zu, \"body_particles\": %zu, \"boundary_particles\": %zu, \"device\": \"%s\"%s}, "
+                "\"metrics\": {\"steps_per_s\": %.3f, \"ms_per_step\": %.3f, \"particle_steps_per_s\": %.0f, "
+                "\"sort_ms\": %.3f, \"density_ms\": %.3f, \"forces_ms\": %.3f, \"bodies_ms\": %.3f, "
+                "\"integration_ms\": %.3f, \"reductions_ms\": %.3f%s}}",
+                sweep.c_str(), fluid + body, fluid, body, m.wall_particle_count, solver.device().name.c_str(),
+                extra_params.c_str(), steps / wall, ms, steps * static_cast<double>(fluid + body) / wall,
+                pass(after.sort_s, before.sort_s), pass(after.density_s, before.density_s),
+                pass(after.forces_s, before.forces_s), pass(after.bodies_s, before.bodies_s),
+                pass(after.integration_s, before.integration_s), pass(after.reductions_s, before.reductions_s),
+                with_cpu ? (", \"cpu_2_threads_ms_per_step\": " + std::to_string(cpu_ms) +
+                            ", \"vulkan_over_cpu\": " + std::to_string(ms / cpu_ms))
+                               .c_str()
+                         : "");
+  records.push_back(buf);
+  std::fprintf(stderr,
+               "bench_sim_vulkan: %-5s %6zu particles (%zu body) on %s: %7.2f ms/step, %6.1f steps/s "
+               "[sort %.2f, density %.2f, forces %.2f, bodies %.2f, integrate %.2f, reductions %.2f ms]",
+               sweep.c_str(), fluid + body, body, solver.device().name.c_str(), ms, steps / wall,
+               pass(after.sort_s, before.sort_s), pass(after.density_s, before.density_s),
+               pass(after.forces_s, before.forces_s), pass(after.bodies_s, before.bodies_s),
+               pass(after.integration_s, before.integration_s), pass(after.reductions_s, before.reductions_s));
+  if (with_cpu) std::fprintf(stderr, "; cpu backend, 2 threads: %.2f ms/step", cpu_ms);
+  std::fprintf(stderr, "\n");
 }
 
 }  // namespace
@@ -133,72 +115,54 @@ std::string json(const std::vector<Record>& records) {
 int main(int argc, char** argv) {
   std::string out;
   bool quick = false, validation = false;
-  double seconds = 2.0;
-  std::vector<int> sizes = {26, 32, 40, 50};  // 8.8k, 16k, 32k, 62.5k fluid particles
-  std::vector<double> sphere_spacings = {0.012, 0.0085, 0.0054, 0.004, 0.0028};  // ~1k, 2k, 5k, 10k, 20k particles
-  std::vector<int> body_counts = {1, 2, 4, 8, 16};
-  bool sweeps = true;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--out" && i + 1 < argc) out = argv[++i];
     else if (a == "--quick") quick = true;
     else if (a == "--validation") validation = true;
-    else if (a == "--seconds" && i + 1 < argc) seconds = std::atof(argv[++i]);
-    else if (a == "--no-sweeps") sweeps = false;
-    else if (a == "--sizes" && i + 1 < argc) {
-      sizes.clear();
-      std::stringstream list(argv[++i]);
-      for (std::string item; std::getline(list, item, ',');) sizes.push_back(std::atoi(item.c_str()));
-    } else {
-      std::cerr << "usage: bench_sim_vulkan --out FILE.json [--quick] [--seconds S] [--sizes 26,32,40] [--no-sweeps] "
-                   "[--validation]\n";
+    else {
+      std::cerr << "usage: bench_sim_vulkan --out FILE.json [--quick] [--validation]\n";
       return 2;
     }
   }
-  if (quick) seconds = 1.0, sizes = {26, 40}, sphere_spacings = {0.012, 0.004}, body_counts = {1, 8};
-  std::vector<std::string> scenes;
-  std::vector<bool> with_cpu;
-  for (int n : sizes) scenes.push_back(pool_scene("pool_" + std::to_string(n), n)), with_cpu.push_back(true);
-  if (sweeps) {
-    // fig. 6b: 25k fluid particles (37 x 37 x 18) and one sphere of radius 0.1 m, half immersed.
-    for (double s : sphere_spacings) {
-      char name[64];
-      std::snprintf(name, sizeof name, "fig6b_sphere_%.4f", s);
-      scenes.push_back(pool_scene(name, 37, sphere_body("sphere", 0.185, 0.185, 0.18, 2.0, s)));
-      with_cpu.push_back(false);
-    }
-    // fig. 6c: the same pool with k spheres of radius 0.04 m (~1k particles each) on a 4 x 4 grid.
-    for (int k : body_counts) {
-      std::string bodies;
-      for (int b = 0; b < k; ++b)
-        bodies += sphere_body("sphere_" + std::to_string(b), 0.05 + 0.09 * (b % 4), 0.05 + 0.09 * (b / 4), 0.18, 0.8, 0.005);
-      scenes.push_back(pool_scene("fig6c_bodies_" + std::to_string(k), 37, bodies));
-      with_cpu.push_back(false);
-    }
+  if (out.empty()) {
+    std::cerr << "bench_sim_vulkan: --out FILE.json is required\n";
+    return 2;
   }
-  std::vector<Record> records;
+  const auto dir = std::filesystem::temp_directory_path() / ("bench_sim_vulkan_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const int steps = quick ? 5 : 30;
   try {
-    for (std::size_t k = 0; k < scenes.size(); ++k) {
-      const Record r = run(scenes[k], seconds, validation, with_cpu[k]);
-      std::fprintf(stderr,
-                   "bench_sim_vulkan: %-22s %6zu fluid + %5zu body particles on %s: %6.1f steps/s, %6.2f ms/step "
-                   "(sort %.2f, density %.2f, forces %.2f, bodies %.2f, integration %.2f, reductions %.2f ms)",
-                   r.scene.c_str(), r.particles, r.body_particles, r.device.c_str(), r.steps_per_s, r.ms_per_step,
-                   1000 * r.passes.sort_s, 1000 * r.passes.density_s, 1000 * r.passes.forces_s, 1000 * r.passes.bodies_s,
-                   1000 * r.passes.integration_s, 1000 * r.passes.reductions_s);
-      if (r.cpu_ms_per_step > 0) std::fprintf(stderr, "; cpu backend (2 threads) %.2f ms/step", r.cpu_ms_per_step);
-      std::fprintf(stderr, "\n");
-      records.push_back(r);
+    const std::vector<int> sizes = quick ? std::vector<int>{8000, 32000} : std::vector<int>{8000, 16000, 32000, 64000};
+    for (int n : sizes) measure("pool", pool_scene(dir, n, n, {}), steps, validation, true, "");
+    const int total = 25000;
+    const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};
+    for (int n : sphere_sizes) {
+      const double r = 0.15;
+      auto scene = pool_scene(dir, total, total - n, {{0.5, 0.5, 0.3, r, spacing_for(n, r)}});
+      measure("fig6b", scene, steps, validation, false, ", \"bodies\": 1, \"body_particles_requested\": " + std::to_string(n));
+    }
+    const std::vector<int> counts = quick ? std::vector<int>{4} : std::vector<int>{1, 2, 4, 8, 16};
+    for (int k : counts) {
+      const int per_row = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(k))));
+      const double cell = 1.0 / per_row, r = std::min(0.15, 0.35 * cell);
+      std::vector<Body> bodies;
+      for (int i = 0; i < k; ++i)
+        bodies.push_back({(i % per_row + 0.5) * cell, (i / per_row + 0.5) * cell, 0.3, r, spacing_for(8000 / k, r)});
+      measure("fig6c", pool_scene(dir, total, total - 8000, bodies), steps, validation, false,
+              ", \"bodies\": " + std::to_string(k));
     }
   } catch (const std::exception& e) {
     std::cerr << "bench_sim_vulkan: " << e.what() << "\n";
+    std::filesystem::remove_all(dir);
     return 1;
   }
-  const std::string text = json(records);
-  if (out.empty()) {
-    std::cout << text;
-  } else {
-    std::ofstream(out) << text;
-  }
+  std::filesystem::remove_all(dir);
+  std::ofstream f(out + ".part");
+  f << "[\n";
+  for (std::size_t i = 0; i < records.size(); ++i) f << "  " << records[i] << (i + 1 < records.size() ? ",\n" : "\n");
+  f << "]\n";
+  f.close();
+  std::filesystem::rename(out + ".part", out);
   return 0;
 }
