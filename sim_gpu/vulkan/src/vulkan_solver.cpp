@@ -85,6 +85,7 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
   max_groups_ = groups(std::max<std::uint32_t>(fluid_count_ + body_particle_count_, 1), 256);
   for (const RigidBody& body : m_.bodies)
     if (body.dynamic) body_chunk_count_ += groups(body.particle_count, 256);
+  check_device_limits();
   create_buffers();
   upload_model();
 
@@ -132,6 +133,21 @@ VulkanSolver::~VulkanSolver() {
   if (fence_) vkDestroyFence(context_->device(), fence_, nullptr);
   program_.reset();
   b_.reset();
+}
+
+void VulkanSolver::check_device_limits() const {
+  // The largest arrays: vec4 per particle (storage and texel views) and the cell tables.
+  const VkPhysicalDeviceLimits& limits = context_->properties().limits;
+  const std::uint64_t particles = std::max({fluid_count_, solid_count_, body_particle_count_});
+  const std::uint64_t largest_bytes = std::max<std::uint64_t>(16 * particles, 4ull * (body_start_base_ + cell_count_ + 1));
+  const std::uint64_t largest_texels = std::max<std::uint64_t>(particles, cell_count_ + 1);
+  if (largest_bytes > limits.maxStorageBufferRange || largest_texels > limits.maxTexelBufferElements)
+    throw std::runtime_error("Vulkan backend: scene '" + m_.scene_name + "' needs arrays of " +
+                             std::to_string(largest_bytes) + " bytes / " + std::to_string(largest_texels) +
+                             " texels, beyond what " + context_->description().name + " allows (" +
+                             std::to_string(limits.maxStorageBufferRange) + " bytes, " +
+                             std::to_string(limits.maxTexelBufferElements) +
+                             " texels); use fewer particles, a smaller domain, or --backend cpu");
 }
 
 void VulkanSolver::create_buffers() {

@@ -89,6 +89,7 @@ class VulkanSolver {
   PhaseTimes phase_times() const;
 
  private:
+  void check_device_limits() const;
   void create_buffers();
   void upload_model();
   void write_params(float dt);
