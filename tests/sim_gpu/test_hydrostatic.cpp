@@ -50,6 +50,7 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   // Bulk: more than one support radius from the walls and the surface, in 2 cm depth bands.
   const double h = scene.support_radius(), g = 9.81, rho0 = scene.fluid.rest_density_kg_m3;
   int bands = 0;
+  std::vector<double> band_depth, band_pressure;
   for (double zc = 0.03; zc < surface - h - 0.01; zc += 0.02) {
     double p = 0, depth = 0;
     int n = 0;
@@ -64,8 +65,24 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
     ASSERT_GT(n, 5);
     p /= n, depth /= n;
     const double expected = rho0 * g * depth;  // Pa
+    // Within 15% pointwise: the top-layer convention for the surface is itself uncertain by a
+    // fraction of a spacing, and the spiky gradient on the relaxed (non-lattice) particle
+    // arrangement reads a few % steep (measured 7-12% above rho0 g d).
     EXPECT_NEAR(p, expected, 0.15 * expected) << "depth " << depth << " m";
+    band_depth.push_back(depth);
+    band_pressure.push_back(p);
     ++bands;
   }
   EXPECT_GE(bands, 5);
+  // The hydrostatic law itself, dp/dd = rho0 g, within 10% (least squares over the bands).
+  double md = 0, mp = 0;
+  for (int b = 0; b < bands; ++b) md += band_depth[b] / bands, mp += band_pressure[b] / bands;
+  double sdd = 0, sdp = 0;
+  for (int b = 0; b < bands; ++b) {
+    sdd += (band_depth[b] - md) * (band_depth[b] - md);
+    sdp += (band_depth[b] - md) * (band_pressure[b] - mp);
+  }
+  const double gradient = sdp / sdd;  // Pa/m
+  std::cout << "hydrostatic: dp/dd = " << gradient << " Pa/m (rho0 g = " << rho0 * g << ")\n";
+  EXPECT_NEAR(gradient, rho0 * g, 0.10 * rho0 * g);
 }
