@@ -19,6 +19,7 @@
 
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
+#include "hapfluid/sim/mesh_sampling.hpp"
 #include "hapfluid/sim/primitive_meshes.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 
@@ -40,7 +41,7 @@ config::Scene pool_scene(const std::filesystem::path& dir, int pool_particles, i
     << "[fluid]\nparticle_spacing_m = " << s << "\nspeed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n"
     << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, " << depth << "]\n";
   for (std::size_t i = 0; i < bodies.size(); ++i) {
-    config::save_obj(primitives::sphere_mesh(bodies[i].radius, 4), dir / ("sphere" + std::to_string(i) + ".obj"));
+    config::save_obj(primitives::sphere_mesh(bodies[i].radius, 5), dir / ("sphere" + std::to_string(i) + ".obj"));
     t << "[[bodies]]\nname = \"sphere" << i << "\"\nmesh = \"sphere" << i << ".obj\"\nposition_m = [" << bodies[i].x << ", "
       << bodies[i].y << ", " << bodies[i].z << "]\ndensity_kg_m3 = 500.0\nsampling_spacing_m = " << bodies[i].spacing << "\n";
   }
@@ -48,8 +49,28 @@ config::Scene pool_scene(const std::filesystem::path& dir, int pool_particles, i
   return config::load_scene(dir / "scene.toml");
 }
 
-// Surface spacing that gives about n particles on a sphere of radius r.
-double spacing_for(int n, double r) { return std::sqrt(4 * 3.14159265 * r * r / n); }
+// bench_sim_cpu's sphere sampling: the spacing that gives n particles on a sphere of radius r.
+double sphere_spacing(int n, double r) {
+  const auto mesh = primitives::sphere_mesh(r, 5);
+  double spacing = std::sqrt(4 * 3.14159265 * r * r / n);
+  for (int pass = 0; pass < 2; ++pass) {
+    const double got = static_cast<double>(sample_surface(mesh, 1.0, spacing, 0.5 * spacing).size());
+    spacing *= std::sqrt(got / n);
+  }
+  return spacing;
+}
+
+// bench_sim_cpu's pool deepened so that fluid + body particles come to `total`.
+config::Scene matched_scene(const std::filesystem::path& dir, int total, const std::vector<Body>& bodies) {
+  int fluid_target = total;
+  config::Scene scene = pool_scene(dir, total, fluid_target, bodies);
+  for (int pass = 0; pass < 2; ++pass) {
+    const SimulationModel m = build_model(scene);
+    fluid_target += total - static_cast<int>(m.fluid.size() + m.body_particles.size());
+    scene = pool_scene(dir, total, fluid_target, bodies);
+  }
+  return scene;
+}
 
 std::vector<std::string> records;
 
@@ -139,17 +160,17 @@ int main(int argc, char** argv) {
     const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};
     for (int n : sphere_sizes) {
       const double r = 0.15;
-      auto scene = pool_scene(dir, total, total - n, {{0.5, 0.5, 0.3, r, spacing_for(n, r)}});
-      measure("fig6b", scene, steps, validation, false, ", \"bodies\": 1, \"body_particles_requested\": " + std::to_string(n));
+      const std::vector<Body> bodies = {{0.5, 0.5, 0.2, r, sphere_spacing(n, r)}};
+      measure("fig6b", matched_scene(dir, total, bodies), steps, validation, false, ", \"bodies\": 1, \"body_particles_requested\": " + std::to_string(n));
     }
     const std::vector<int> counts = quick ? std::vector<int>{4} : std::vector<int>{1, 2, 4, 8, 16};
     for (int k : counts) {
       const int per_row = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(k))));
       const double cell = 1.0 / per_row, r = std::min(0.15, 0.35 * cell);
+      const double spacing = sphere_spacing(8000 / k, r);
       std::vector<Body> bodies;
-      for (int i = 0; i < k; ++i)
-        bodies.push_back({(i % per_row + 0.5) * cell, (i / per_row + 0.5) * cell, 0.3, r, spacing_for(8000 / k, r)});
-      measure("fig6c", pool_scene(dir, total, total - 8000, bodies), steps, validation, false,
+      for (int i = 0; i < k; ++i) bodies.push_back({(i % per_row + 0.5) * cell, (i / per_row + 0.5) * cell, 0.2, r, spacing});
+      measure("fig6c", matched_scene(dir, total, bodies), steps, validation, false,
               ", \"bodies\": " + std::to_string(k));
     }
   } catch (const std::exception& e) {
