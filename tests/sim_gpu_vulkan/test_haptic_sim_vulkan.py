@@ -62,3 +62,19 @@ def test_unknown_vulkan_device_preference_is_rejected(binary, source_dir, tmp_pa
     result = run(binary, source_dir, tmp_path, "--backend", "vulkan", "--vk-device", "fastest")
     assert result.returncode == 2
     assert "--vk-device" in result.stderr and "auto, gpu or cpu" in result.stderr
+
+
+def test_coupled_body_run_keeps_the_validation_layer_silent(binary, source_dir, tmp_path):
+    # The rigid-body path (body sort, per-body reductions, host integration between the two
+    # submissions of a step, eq. 14) under the Khronos layer with synchronization validation.
+    result = subprocess.run(
+        [str(binary("haptic-sim")), "--scene", "tests/sim_gpu_vulkan/scenes/spoon_small.toml", "--out", str(tmp_path),
+         "--duration", "0.03", "--backend", "vulkan", "--vk-validation", "--export-every", "0"],
+        cwd=source_dir, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((tmp_path / "stats.json").read_text())
+    assert stats["complete"] is True and stats["particles"]["body"] > 0
+    assert stats["vulkan_validation"] == {"enabled": True, "warnings": 0, "errors": 0}
+    assert stats["gpu_pass_ms_per_step"]["bodies"] > 0
+    rows = (tmp_path / "couplings.csv").read_text().splitlines()
+    assert rows[0] == "t,device,body,fx,fy,fz,tx,ty,tz" and len(rows) > 1
