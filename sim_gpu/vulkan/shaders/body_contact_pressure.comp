@@ -34,7 +34,9 @@ void main() {
       sum += run;
     }
   }
-  {
+  // Other bodies' particles (body<->body contact); with a single dynamic body every candidate
+  // would be its own and skipped: the loop is not run at all.
+  if (P.counts.w > 1u) {
     NEIGHBOUR_RUNS(v_cell_start, xi) {
       for (uint j = run_begin; j < run_end; ++j) {
         if (texelFetch(v_c, int(j)).y == own) continue;

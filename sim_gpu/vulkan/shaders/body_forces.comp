@@ -70,7 +70,8 @@ void main() {
       }
     }
   }
-  {
+  // Other bodies' particles; none to visit with a single dynamic body (all would be skipped).
+  if (P.counts.w > 1u) {
     NEIGHBOUR_RUNS(v_cell_start, xi) {
       for (uint j = run_begin; j < run_end; ++j) {
         vec4 cj = texelFetch(v_c, int(j));

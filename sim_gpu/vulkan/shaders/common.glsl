@@ -12,7 +12,7 @@ layout(std140, set = 0, binding = BINDING_PARAMS) uniform Params {
   vec4 clamp_hi;      // sides, the box face on open sides (SimulationParams::clamp_lo/hi)
   vec4 grid_origin;   // min corner (m), cell size (m)
   ivec4 grid_dims;    // cells along x, y, z; cell count
-  uvec4 counts;       // fluid, static solid, body particles; dynamic bodies
+  uvec4 counts;       // fluid, static solid, dynamic body particles; dynamic bodies
 } P;
 
 float h() { return P.kernel.x; }

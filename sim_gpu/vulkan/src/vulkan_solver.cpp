@@ -352,7 +352,9 @@ void VulkanSolver::write_params(float dt) {
   block.grid_origin[3] = p.grid.cell_size;
   block.grid_dims[3] = static_cast<std::int32_t>(cell_count_);
   block.counts[0] = fluid_count_, block.counts[1] = solid_count_, block.counts[2] = body_particle_count_;
-  block.counts[3] = static_cast<std::uint32_t>(m_.bodies.size());
+  std::uint32_t dynamic_bodies = 0;
+  for (const RigidBody& body : m_.bodies) dynamic_bodies += body.dynamic ? 1 : 0;
+  block.counts[3] = dynamic_bodies;
   b_->params.upload(&block, sizeof block);
 }
 
