@@ -339,3 +339,44 @@ grasp_position_m = [0.29, 0.02, 0.02]
   }
   std::filesystem::remove_all(dir);
 }
+
+TEST(RigidBody, BodiesCollideWithEachOtherAndTheFloorWithoutPassingThrough) {
+  // Body<->body and body<->wall contacts go through the same particle pressure forces (contact
+  // pressure from the other solid's particles): two balls dropped in vacuum onto the floor,
+  // one above the other, never interpenetrate by more than a particle spacing.
+  const double r = 0.03, s = 0.01;
+  const auto dir = test::temp_dir("stack");
+  const auto scene = test::write_scene(dir, "name = \"stack\"\n" + domain(0, 0, 0, 0.2, 0.2, 0.4) + R"(
+[fluid]
+particle_spacing_m = 0.01
+speed_of_sound_m_s = 10.0
+[[bodies]]
+name = "lower"
+mesh = "ball.obj"
+position_m = [0.1, 0.1, 0.1]
+density_kg_m3 = 800.0
+[[bodies]]
+name = "upper"
+mesh = "ball.obj"
+position_m = [0.105, 0.1, 0.2]
+density_kg_m3 = 800.0
+[time]
+max_dt_s = 0.0005
+)", {{"ball.obj", test::sphere_mesh(r, 2)}});
+  CpuSolver solver(build_model(scene), 2);
+  double closest = 1e9, lowest = 1e9;
+  for (int k = 0; k < 60; ++k) {
+    solver.advance(0.01);
+    const auto& b = solver.model().bodies;
+    closest = std::min(closest, norm(b[1].position - b[0].position));
+    lowest = std::min(lowest, b[0].position.z - r);
+  }
+  std::cout << "stack: closest centre distance " << closest << " m (2r = " << 2 * r << "), lowest bottom " << lowest
+            << " m\n";
+  const auto& b = solver.model().bodies;
+  EXPECT_LT(lowest, 0.01);  // the lower ball did reach the floor (m); contacts are elastic, it bounces
+  EXPECT_GT(closest, 2 * r - s);
+  EXPECT_GT(lowest, -0.5 * s);
+  EXPECT_GT(b[1].position.z, b[0].position.z + r);  // still on top
+  std::filesystem::remove_all(dir);
+}
