@@ -121,11 +121,12 @@ cfl = 0.2
 )", {{"ball.obj", test::sphere_mesh(r, 2)}});
   CpuSolver solver(build_model(scene), 2);
   test::run_for(solver, 1.2, 0.02);
-  double centre = 0;
+  double centre = 0, fastest = 0;
   const int samples = 10;
   for (int k = 0; k < samples; ++k) {  // average over 0.2 s of residual bobbing
     test::run_for(solver, 0.02, 0.02);
     centre += solver.model().bodies[0].position.z / samples;
+    fastest = std::max(fastest, std::abs(solver.model().bodies[0].linear_velocity.z));
   }
   // Undisturbed free surface: top layer far from the ball, plus half a spacing.
   const auto& f = solver.model().fluid;
@@ -141,7 +142,7 @@ cfl = 0.2
   // Particle boundaries blur the surface by a fraction of a spacing: at 3 spacings per radius the
   // sphere sits a little high (measured 0.35); "about half" within 0.2.
   EXPECT_NEAR(fraction, 0.5, 0.2);
-  EXPECT_LT(std::abs(solver.model().bodies[0].linear_velocity.z), 0.05);  // m/s: it came to rest
+  EXPECT_LT(fastest, 0.1);  // m/s: only a residual bob of a few mm is left
   std::filesystem::remove_all(dir);
 }
 
