@@ -181,8 +181,9 @@ cfl = 0.2
 
 namespace {
 
-// Peak fluid torque about z (most negative) on a cup full of fluid spun up about z by a device:
-// the start phase of fig. 10, where the container drags the fluid at rest into rotation.
+// Mean fluid torque about z on a cup full of fluid while a device spins it up about z (the
+// 0.1 s ramp from 0.05 s): the start phase of fig. 10, where the container drags the fluid at
+// rest into rotation. Its time integral is the angular momentum handed to the fluid.
 double spin_up_torque(double container_viscosity) {
   const auto dir = test::temp_dir("spin" + std::to_string(static_cast<int>(container_viscosity)));
   char body[2048];
@@ -225,13 +226,12 @@ cfl = 0.2
 )" + body, {{"cup.obj", test::cup_mesh(0.05, 0.08, 0.01, 48)}});
   CpuSolver solver(build_model(scene), 2);
   double torque = 0;
-  int n = 0;
   const double frame = 0.01;
-  for (int k = 0; k < 30; ++k) {
+  for (int k = 0; k < 15; ++k) {
     const double t = solver.time_s();
     solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, t)));
     solver.advance(frame);
-    if (t >= 0.05) torque = std::min(torque, solver.model().bodies[0].fluid_torque.z), ++n;
+    if (t >= 0.05 - 1e-9 && t < 0.15 - 1e-9) torque += solver.model().bodies[0].fluid_torque.z / 10;
   }
   std::filesystem::remove_all(dir);
   return torque;
@@ -241,10 +241,10 @@ cfl = 0.2
 
 TEST(Coupling, SpunContainerFeelsTorqueOpposingSpinGrowingWithItsViscosity) {
   const double low = spin_up_torque(2.0), high = spin_up_torque(40.0);
-  std::cout << "spin-up peak fluid torque about z: container 2 Pa s " << low << " N m, 40 Pa s " << high << " N m\n";
+  std::cout << "spin-up mean fluid torque about z: container 2 Pa s " << low << " N m, 40 Pa s " << high << " N m\n";
   EXPECT_LT(low, 0.0);   // against the spin (+z)
   EXPECT_LT(high, 0.0);
-  EXPECT_LT(high, low);  // stronger (more negative) with the more viscous container
+  EXPECT_LT(high, 1.1 * low);  // at least 10% stronger (more negative) with the more viscous container
 }
 
 TEST(Coupling, StirringToolFeelsForceAgainstItsMotion) {
