@@ -33,7 +33,6 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
     devices_[d] = device_state_from(config::evaluate_motion(m_.devices[d].motion, 0.0));
   couplings_of_body_.resize(m_.bodies.size());
   for (auto& c : m_.couplings) couplings_of_body_[c.body].push_back(&c);
-  worker_max_speed_.assign(threads, 0);
   worker_max_accel_.assign(threads, 0);
   worker_clamped_.assign(threads, 0);
   neighbour_lists_.resize(threads);
@@ -289,8 +288,12 @@ void CpuSolver::step(double dt) {
   const float dtf = static_cast<float>(dt);
   auto t0 = Clock::now();
   sort_fluid();
-  if (m_.body_particles.size() > 0) build_body_view();
-  else body_view_.resize(0), body_view_.cell_start.clear();
+  if (m_.body_particles.size() > 0) {
+    build_body_view();
+  } else {
+    body_view_.resize(0);
+    body_view_.cell_start.clear();
+  }
   times_.neighbour_search_s += seconds_since(t0);
 
   t0 = Clock::now();
