@@ -59,9 +59,14 @@ std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.
 
 }  // namespace
 
-BatchResult run_batch(const BatchOptions& o, std::ostream& progress) {
+BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
+  BatchOptions o = options;
+  if (o.backend == "auto") {
+    progress << "haptic-sim: --backend auto: no GPU backend in this build, using the cpu backend\n";
+    o.backend = "cpu";
+  }
   if (o.backend != "cpu")
-    throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only");
+    throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only (use cpu or auto)");
   if (o.threads < 1 || o.threads > 256) throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1..256");
   const config::Scene scene = config::load_scene(o.scene);
   const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;

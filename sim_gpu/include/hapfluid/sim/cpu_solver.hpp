@@ -70,7 +70,7 @@ class CpuSolver {
   SortedSolids body_view_;  // dynamic body particles sorted by cell (rebuilt each step)
   std::vector<DeviceState> devices_;
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
-  std::vector<float> worker_max_speed_, worker_max_accel_;
+  std::vector<float> worker_max_accel_;
   std::vector<std::uint64_t> worker_clamped_;
   std::vector<detail::NeighbourLists> neighbour_lists_;  // one per worker
   std::vector<detail::NeighbourRange> neighbour_ranges_;  // one per fluid particle
