@@ -181,7 +181,10 @@ TEST(VulkanEquivalence, TwoSpheresInContactEqualCpuStepByStep) {
       const double torque_scale = std::max(hs::norm(a.contact_torque), 0.035 * hs::norm(a.contact_force));
       EXPECT_LT(distance(a.contact_torque, g.contact_torque), 1e-4 * std::max(torque_scale, 1e-5))
           << a.name << ", step " << s;
-      EXPECT_LT(distance(a.fluid_force, g.fluid_force), 1e-4 * std::max(hs::norm(a.fluid_force), 1e-2))
+      // The fluid force is a sum of pressure terms of the order of the buoyancy (~ the weight)
+      // that partly cancel: its rounding scales with the weight, not with the small total.
+      const double weight_n = a.mass_kg * 9.81;
+      EXPECT_LT(distance(a.fluid_force, g.fluid_force), 1e-4 * std::max(hs::norm(a.fluid_force), weight_n))
           << a.name << ", step " << s;
       EXPECT_LT(distance(a.position, g.position), 1e-7) << a.name << ", step " << s;
     }
