@@ -74,7 +74,7 @@ void VulkanSolver::record_body_sort(VkCommandBuffer cb) {
   compute_barrier(cb);
 }
 
-void VulkanSolver::record_body_step(VkCommandBuffer head, VkCommandBuffer tail) {
+void VulkanSolver::record_body_step(VkCommandBuffer head, VkCommandBuffer tail, bool with_maxima) {
   // Head: everything up to the per-body sums the host needs to integrate the bodies.
   const ComputeProgram& p = *program_;
   const std::uint32_t bodies = static_cast<std::uint32_t>(m_.bodies.size());
@@ -84,28 +84,31 @@ void VulkanSolver::record_body_step(VkCommandBuffer head, VkCommandBuffer tail) 
     ++query;
   };
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
-  check(vkBeginCommandBuffer(head, &begin), "vkBeginCommandBuffer");
-  if (body_queries_) vkCmdResetQueryPool(head, body_queries_, 0, kBodyStepQueries);
-  host_to_compute_barrier(head);
-  stamp(head);
-  record_sort(head);
-  record_body_sort(head);
-  stamp(head);
-  p.dispatch(head, Pass::density_cells, groups(cell_count_, 64));
-  p.dispatch(head, Pass::body_contact_pressure, groups(body_particle_count_, 64));
-  compute_barrier(head);
-  stamp(head);
-  p.dispatch(head, Pass::fluid_forces_cells, groups(cell_count_, 64));
-  p.dispatch(head, Pass::body_forces, groups(body_particle_count_, 64));
-  compute_barrier(head);
-  stamp(head);
-  p.dispatch(head, Pass::body_sums, body_chunk_count_);
-  compute_barrier(head);
-  p.dispatch(head, Pass::body_sums_final, bodies, {body_chunk_count_, 0, 0, 0});
-  compute_barrier(head);
-  stamp(head);
-  compute_to_host_barrier(head);
-  check(vkEndCommandBuffer(head), "vkEndCommandBuffer");
+  if (head) {
+    check(vkBeginCommandBuffer(head, &begin), "vkBeginCommandBuffer");
+    if (body_queries_) vkCmdResetQueryPool(head, body_queries_, 0, kBodyStepQueries);
+    host_to_compute_barrier(head);
+    stamp(head);
+    record_sort(head);
+    record_body_sort(head);
+    stamp(head);
+    p.dispatch(head, Pass::density_cells, groups(cell_count_, 64));
+    p.dispatch(head, Pass::body_contact_pressure, groups(body_particle_count_, 64));
+    compute_barrier(head);
+    stamp(head);
+    p.dispatch(head, Pass::fluid_forces_cells, groups(cell_count_, 64));
+    p.dispatch(head, Pass::body_forces, groups(body_particle_count_, 64));
+    compute_barrier(head);
+    stamp(head);
+    p.dispatch(head, Pass::body_sums, body_chunk_count_);
+    compute_barrier(head);
+    p.dispatch(head, Pass::body_sums_final, bodies, {body_chunk_count_, 0, 0, 0});
+    compute_barrier(head);
+    stamp(head);
+    compute_to_host_barrier(head);
+    check(vkEndCommandBuffer(head), "vkEndCommandBuffer");
+  }
+  query = 5;
 
   // Tail: after the host wrote the new body states, eq. 14 and the fluid leap-frog.
   check(vkBeginCommandBuffer(tail, &begin), "vkBeginCommandBuffer");
@@ -117,8 +120,11 @@ void VulkanSolver::record_body_step(VkCommandBuffer head, VkCommandBuffer tail) 
   p.dispatch(tail, Pass::integrate_fluid, groups(fluid_count_, 64));
   compute_barrier(tail);
   stamp(tail);
-  record_maxima(tail);
-  compute_barrier(tail);
+  // The CFL inputs are needed once per frame: only the last substep's tail computes them.
+  if (with_maxima) {
+    record_maxima(tail);
+    compute_barrier(tail);
+  }
   stamp(tail);
   compute_to_host_barrier(tail);
   check(vkEndCommandBuffer(tail), "vkEndCommandBuffer");

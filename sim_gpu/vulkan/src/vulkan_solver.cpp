@@ -113,7 +113,9 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
     }
     body_head_ = allocate_command_buffer();
     body_tail_ = allocate_command_buffer();
-    record_body_step(body_head_, body_tail_);
+    body_tail_maxima_ = allocate_command_buffer();
+    record_body_step(body_head_, body_tail_, false);
+    record_body_step(VK_NULL_HANDLE, body_tail_maxima_, true);
   }
   VkCommandBuffer cb = allocate_command_buffer();
   recorded_[0] = cb;
@@ -126,7 +128,7 @@ VulkanSolver::~VulkanSolver() {
   if (!context_) return;
   vkDeviceWaitIdle(context_->device());
   for (auto& [n, cb] : recorded_) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
-  for (VkCommandBuffer cb : {body_head_, body_tail_})
+  for (VkCommandBuffer cb : {body_head_, body_tail_, body_tail_maxima_})
     if (cb) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
   if (queries_) vkDestroyQueryPool(context_->device(), queries_, nullptr);
   if (body_queries_) vkDestroyQueryPool(context_->device(), body_queries_, nullptr);
@@ -389,7 +391,10 @@ int VulkanSolver::advance(double duration_s) {
 void VulkanSolver::step_many(double dt, int substeps) {
   if (substeps <= 0) return;
   if (body_particle_count_ > 0) {
-    for (int s = 0; s < substeps; ++s) step_with_bodies(dt);
+    std::uint32_t* reduce = static_cast<std::uint32_t*>(b_->reduce.mapped());
+    reduce[0] = 0;  // clamped-particle counter of these substeps
+    for (int s = 0; s < substeps; ++s) step_with_bodies(dt, s + 1 == substeps);
+    read_results(0);
     return;
   }
   write_params(static_cast<float>(dt));
@@ -402,14 +407,11 @@ void VulkanSolver::step_many(double dt, int substeps) {
   steps_ += static_cast<std::uint64_t>(substeps);
 }
 
-void VulkanSolver::step_with_bodies(double dt) {
+void VulkanSolver::step_with_bodies(double dt, bool last_of_frame) {
   write_params(static_cast<float>(dt));
-  std::uint32_t* reduce = static_cast<std::uint32_t*>(b_->reduce.mapped());
-  reduce[0] = 0;
   submit_and_wait(body_head_);
   integrate_bodies(dt);
-  submit_and_wait(body_tail_);
-  read_results(0);
+  submit_and_wait(last_of_frame ? body_tail_maxima_ : body_tail_);
   if (body_queries_) {
     std::uint64_t ticks[kBodyStepQueries];
     check(vkGetQueryPoolResults(context_->device(), body_queries_, 0, kBodyStepQueries, sizeof ticks, ticks,

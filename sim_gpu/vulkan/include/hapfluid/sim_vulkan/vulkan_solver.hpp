@@ -97,12 +97,14 @@ class VulkanSolver {
   void record_steps(VkCommandBuffer cb, int substeps);
   void record_sort(VkCommandBuffer cb);
   void record_body_sort(VkCommandBuffer cb);
-  void step_with_bodies(double dt);
+  void step_with_bodies(double dt, bool last_of_frame);
   void integrate_bodies(double dt);
   void write_body_states();
   VkCommandBuffer allocate_command_buffer();
   void record_maxima(VkCommandBuffer cb);
-  void record_body_step(VkCommandBuffer head, VkCommandBuffer tail);
+  // Records the head (may be null) and the tail of a body step; the tail computes the CFL
+  // maxima when `with_maxima` (the last substep of a frame).
+  void record_body_step(VkCommandBuffer head, VkCommandBuffer tail, bool with_maxima);
   static constexpr std::uint32_t kBodyStepQueries = 9;
   void submit_and_wait(VkCommandBuffer cb);
   void read_results(int substeps);
@@ -120,7 +122,7 @@ class VulkanSolver {
   std::uint32_t fluid_count_ = 0, solid_count_ = 0, cell_count_ = 0, scan_blocks_ = 0, max_groups_ = 0;
   std::uint32_t body_particle_count_ = 0, body_start_base_ = 0, body_chunk_count_ = 0;
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
-  VkCommandBuffer body_head_ = VK_NULL_HANDLE, body_tail_ = VK_NULL_HANDLE;
+  VkCommandBuffer body_head_ = VK_NULL_HANDLE, body_tail_ = VK_NULL_HANDLE, body_tail_maxima_ = VK_NULL_HANDLE;
   VkQueryPool body_queries_ = VK_NULL_HANDLE;
   struct Buffers;
   std::unique_ptr<Buffers> b_;
