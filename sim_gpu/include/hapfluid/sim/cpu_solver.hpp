@@ -19,8 +19,10 @@ namespace hapfluid::sim {
 // Wall-clock seconds spent in each phase, summed over all steps.
 struct PhaseTimes {
   double neighbour_search_s = 0;  // counting sort of fluid and body particles by cell
-  double density_s = 0;           // eq. 2 and eq. 7 (fluid), contact pressure (bodies)
-  double forces_s = 0;            // eqs. 5, 6, 9 on fluid and body particles
+  // eq. 2 and eq. 7 (fluid), contact pressure (bodies); includes the distance checks over the
+  // 27 cells that build the neighbour lists (fused with the density sum).
+  double density_s = 0;
+  double forces_s = 0;            // eqs. 5, 6, 9 on fluid (over the lists) and body particles
   double bodies_s = 0;            // eqs. 10-14, couplings (Algorithm 2)
   double integration_s = 0;       // fluid leap-frog
 };
