@@ -120,14 +120,9 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
     export_frame(0);
     for (int k = 0; k < frames; ++k) {
       const double t0 = k * frame, t1 = std::min(duration, (k + 1) * frame);
-      const double dt_limit = solver.stable_time_step();
-      const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / dt_limit - 1e-9)));
+      const int substeps = solver.advance(t1 - t0, set_devices);
       const double dt = (t1 - t0) / substeps;
       dt_min = std::min(dt_min, dt), dt_max = std::max(dt_max, dt);
-      for (int s = 0; s < substeps; ++s) {
-        set_devices(t0 + s * dt);
-        solver.step(dt);
-      }
       solver.check_finite();
       r.steps = solver.steps();
       r.simulated_time_s = t1;

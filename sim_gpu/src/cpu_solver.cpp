@@ -81,12 +81,16 @@ double CpuSolver::stable_time_step() const {
   return std::min(dt, p.max_dt_s);
 }
 
-int CpuSolver::advance(double duration_s) {
+int CpuSolver::advance(double duration_s, const std::function<void(double)>& before_substep) {
   if (duration_s <= 0) return 0;
   const double dt_max = stable_time_step();
   const int substeps = std::max(1, static_cast<int>(std::ceil(duration_s / dt_max - 1e-9)));
   const double dt = duration_s / substeps;
-  for (int i = 0; i < substeps; ++i) step(dt);
+  const double t0 = time_s_;
+  for (int i = 0; i < substeps; ++i) {
+    if (before_substep) before_substep(t0 + i * dt);
+    step(dt);
+  }
   return substeps;
 }
 

@@ -183,7 +183,8 @@ namespace {
 
 // Mean fluid torque about z on a cup full of fluid while a device spins it up about z (the
 // 0.1 s ramp from 0.05 s): the start phase of fig. 10, where the container drags the fluid at
-// rest into rotation. Its time integral is the angular momentum handed to the fluid.
+// rest into rotation. Its time integral is the angular momentum handed to the fluid. The device
+// pose is updated every substep, as the batch runner does.
 double spin_up_torque(double container_viscosity) {
   const auto dir = test::temp_dir("spin" + std::to_string(static_cast<int>(container_viscosity)));
   char body[2048];
@@ -229,8 +230,9 @@ cfl = 0.2
   const double frame = 0.01;
   for (int k = 0; k < 15; ++k) {
     const double t = solver.time_s();
-    solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, t)));
-    solver.advance(frame);
+    solver.advance(frame, [&](double now) {
+      solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, now)));
+    });
     if (t >= 0.05 - 1e-9 && t < 0.15 - 1e-9) torque += solver.model().bodies[0].fluid_torque.z / 10;
   }
   std::filesystem::remove_all(dir);
@@ -244,7 +246,7 @@ TEST(Coupling, SpunContainerFeelsTorqueOpposingSpinGrowingWithItsViscosity) {
   std::cout << "spin-up mean fluid torque about z: container 2 Pa s " << low << " N m, 40 Pa s " << high << " N m\n";
   EXPECT_LT(low, 0.0);   // against the spin (+z)
   EXPECT_LT(high, 0.0);
-  EXPECT_LT(high, 1.1 * low);  // at least 10% stronger (more negative) with the more viscous container
+  EXPECT_LT(high, 1.5 * low);  // much stronger (more negative) with the more viscous container (measured 2.3x)
 }
 
 TEST(Coupling, StirringToolFeelsForceAgainstItsMotion) {
@@ -286,9 +288,9 @@ cfl = 0.2
   CpuSolver solver(build_model(scene), 2);
   double power = 0, speed2 = 0;
   for (int k = 0; k < 50; ++k) {
-    const double t = solver.time_s();
-    solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, t)));
-    solver.advance(0.01);
+    solver.advance(0.01, [&](double now) {
+      solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, now)));
+    });
     const RigidBody& b = solver.model().bodies[0];
     power += b.fluid_force.x * b.linear_velocity.x;
     speed2 += b.linear_velocity.x * b.linear_velocity.x;

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -50,8 +51,9 @@ class CpuSolver {
   // One step of dt seconds.
   void step(double dt);
   // Advances by `duration_s` in equal substeps no longer than stable_time_step(); returns the
-  // number of substeps. Device states must be set by the caller (they are held constant).
-  int advance(double duration_s);
+  // number of substeps. before_substep(t), when given, runs before each substep with the
+  // substep's start time (the caller sets device states there); otherwise they are held.
+  int advance(double duration_s, const std::function<void(double)>& before_substep = {});
 
   // Throws std::runtime_error naming the first particle or body whose state is not finite.
   void check_finite() const;
