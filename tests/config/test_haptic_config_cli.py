@@ -56,8 +56,8 @@ def test_broken_rig_is_rejected_with_a_precise_message(binary, tmp_path, case):
 
 
 def scene_with(source_dir, tmp_path, old, new):
-    """spoon_stirring.toml with one edit, written where its relative mesh path still resolves."""
-    path = source_dir / "config" / "scenes" / "spoon_stirring.toml"
+    """The frozen stirring scene with one edit, written where its relative mesh path still resolves."""
+    path = source_dir / "tests" / "config" / "scenes" / "stirring_base.toml"
     text = path.read_text()
     assert old in text
     out = tmp_path / "scenes" / "broken.toml"
@@ -72,7 +72,7 @@ def scene_with(source_dir, tmp_path, old, new):
 BROKEN_SCENES = {
     "non-positive spacing": ("particle_spacing_m = 0.02", "particle_spacing_m = 0.0",
                              "fluid.particle_spacing_m = 0.0: must be > 0"),
-    "body outside the domain": ("position_m = [0.20, 0.15, 0.06]", "position_m = [0.20, 0.15, 0.30]",
+    "body outside the domain": ("position_m = [0.20, 0.15, 0.075]", "position_m = [0.20, 0.15, 0.30]",
                                 "bodies.spoon.position_m = [0.2, 0.15, 0.3]: body outside the domain"),
     "mesh not found": ('mesh = "../meshes/spoon.obj"', 'mesh = "../meshes/ladle.obj"',
                        'bodies.spoon.mesh = "../meshes/ladle.obj": mesh file not found'),
@@ -80,7 +80,7 @@ BROKEN_SCENES = {
                                      'couplings[0].device = "foot": coupling to a missing device "foot"'),
     "coupling to a missing body": ('body = "spoon"', 'body = "ladle"',
                                    'couplings[0].body = "ladle": coupling to a missing body "ladle"'),
-    "non-finite": ("viscosity_pa_s = 0.2", "viscosity_pa_s = inf", "fluid.viscosity_pa_s = inf: must be finite"),
+    "non-finite": ("viscosity_pa_s = 2.0", "viscosity_pa_s = inf", "fluid.viscosity_pa_s = inf: must be finite"),
     "unknown key": ("look = \"water\"", "colour = \"water\"", 'fluid.colour = "water": unknown key'),
 }
 
