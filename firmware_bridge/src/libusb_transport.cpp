@@ -5,19 +5,18 @@
 // Transfers are torn down by libusb's rule (usb_transfer_book.hpp): stop resubmitting, cancel,
 // handle events until every callback has returned, then free and close. An unplugged device is
 // reported as kDisconnected and the driver recovers by itself: once the dead connection's
-// transfers have all returned, a background thread (the only one; it never touches a live
-// connection) disposes of it and opens the device again by VID:PID every 200 ms; service()
-// adopts the new connection with a single atomic exchange, so the loop never blocks on it.
+// transfers have all returned, a ReopenWorker thread (it never touches a live connection)
+// disposes of it and opens the device again by VID:PID every 200 ms; service() adopts the new
+// connection with a single atomic exchange, so the loop never blocks on it.
 #include <libusb-1.0/libusb.h>
 #include <sys/stat.h>
 #include <time.h>
 
 #include <array>
-#include <atomic>
 #include <cstdio>
 #include <cstring>
-#include <thread>
 
+#include "hapfluid/device/reopen_worker.hpp"
 #include "hapfluid/device/usb_transfer_book.hpp"
 #include "hapfluid/device/usb_transports.hpp"
 
@@ -28,7 +27,6 @@ namespace {
 using Book = UsbTransferBook;
 constexpr int kRing = 64;             // packets; 64 ms of state at 1 kHz
 constexpr int kPacketBytes = 64;      // one protocol packet per transfer (protocol.md 4.5)
-constexpr int kReconnectPeriodMs = 200;
 constexpr int kCloseLimitMs = 2000;   // cancelled transfers return within ms; this only bounds a broken stack
 
 Book::Status status_of(libusb_transfer_status s) {
@@ -120,13 +118,21 @@ Connection* connect(std::uint16_t vendor, std::uint16_t product, const std::stri
 
 class LibusbTransport final : public Transport {
  public:
-  explicit LibusbTransport(const std::string& address) : address_(address) {
+  explicit LibusbTransport(const std::string& address)
+      : address_(address),
+        reopen_([this]() -> Connection* {
+                  try {
+                    return connect(vendor_, product_, address_);
+                  } catch (const TransportError&) {
+                    return nullptr;  // not back yet
+                  }
+                },
+                dispose) {
     parse_vid_pid(address, vendor_, product_);
     for (int i = 0; i < Book::kIn; ++i) in_refs_[i] = {this, i};
     for (int i = 0; i < Book::kOut; ++i) out_refs_[i] = {this, i};
     live_ = connect(vendor_, product_, address);
     start_streaming();
-    reconnector_ = std::thread([this] { reconnect_loop(); });
   }
 
   ~LibusbTransport() override {
@@ -139,9 +145,6 @@ class LibusbTransport final : public Transport {
       for (int waited_ms = 0; !book_.quiescent() && waited_ms < kCloseLimitMs; waited_ms += 10)
         libusb_handle_events_timeout_completed(live_->context, &tick, nullptr);
     }
-    command_.store(kStop);
-    command_.notify_one();
-    if (reconnector_.joinable()) reconnector_.join();
     if (live_ && !book_.quiescent()) {
       // Never free a transfer libusb still owns: leak this connection rather than corrupt memory.
       std::fprintf(stderr, "libusb %s: %d IN / %d OUT transfers did not return within %d ms of cancelling; "
@@ -150,9 +153,7 @@ class LibusbTransport final : public Transport {
     } else {
       dispose(live_);
     }
-    dispose(retired_.exchange(nullptr));
-    dispose(fresh_.exchange(nullptr));
-  }
+  }  // then reopen_ stops its thread and disposes of any connection it still holds
 
   Io send(const WireFrame& frame) override {
     service();
@@ -187,7 +188,7 @@ class LibusbTransport final : public Transport {
   void service() override {
     if (!live_) {
       // Unplugged: adopt the connection the reconnect thread opened, if any (one atomic exchange).
-      if (Connection* c = fresh_.exchange(nullptr)) adopt(c);
+      if (Connection* c = reopen_.take()) adopt(c);
       return;
     }
     timeval zero{0, 0};
@@ -199,10 +200,8 @@ class LibusbTransport final : public Transport {
       cancelled_ = true;
     }
     if (book_.quiescent()) {  // every callback returned: hand the dead connection over, reconnect
-      retired_.store(live_);
+      reopen_.retire(live_);
       live_ = nullptr;
-      command_.store(kReconnect);
-      command_.notify_one();
     }
   }
 
@@ -217,7 +216,6 @@ class LibusbTransport final : public Transport {
     LibusbTransport* self = nullptr;
     int slot = 0;
   };
-  enum Command : int { kIdle, kReconnect, kStop };
 
   void start_streaming() {
     for (int i = 0; i < Book::kIn; ++i) {
@@ -244,30 +242,6 @@ class LibusbTransport final : public Transport {
       if (book_.in_busy(i)) libusb_cancel_transfer(live_->in[i]);
     for (int i = 0; i < Book::kOut; ++i)
       if (book_.out_busy(i)) libusb_cancel_transfer(live_->out[i]);
-  }
-
-  // The reconnect thread: idle until service() retires a lost connection, then disposes of it
-  // and opens the device again until that succeeds or the transport closes.
-  void reconnect_loop() {
-    for (;;) {
-      const int command = command_.load();
-      if (command == kStop) return;
-      if (command == kIdle) {
-        command_.wait(kIdle);
-        continue;
-      }
-      dispose(retired_.exchange(nullptr));
-      try {
-        fresh_.store(connect(vendor_, product_, address_));
-        int expected = kReconnect;
-        command_.compare_exchange_strong(expected, kIdle);  // a kStop meanwhile stays
-      } catch (const TransportError&) {
-        for (int ms = 0; ms < kReconnectPeriodMs && command_.load() == kReconnect; ms += 10) {
-          timespec nap{0, 10'000'000};
-          nanosleep(&nap, nullptr);
-        }
-      }
-    }
   }
 
   static void LIBUSB_CALL on_in(libusb_transfer* transfer) {
@@ -313,12 +287,7 @@ class LibusbTransport final : public Transport {
   std::uint64_t head_ = 0, tail_ = 0;
   std::uint32_t errors_ = 0;
   std::uint32_t reconnects_ = 0;
-  // Hand-over with the reconnect thread, lock-free: the loop thread stores a lost connection in
-  // retired_ and sets kReconnect; the thread stores the new one in fresh_.
-  std::atomic<Connection*> retired_{nullptr};
-  std::atomic<Connection*> fresh_{nullptr};
-  std::atomic<int> command_{kIdle};
-  std::thread reconnector_;
+  ReopenWorker<Connection> reopen_;  // last: its thread stops before anything above goes
 };
 
 }  // namespace

@@ -206,9 +206,14 @@ int check_arm(std::unique_ptr<device::Device>& owned, const Options& o) {
         fail("the driver did not recover by itself after the replug (health().connected stays false, transport 0x" +
              std::to_string(dev.health().transport_errors) + ")");
       receive_states(dev, s, 50, o.limit_s, "after replug");
-      // The device's watchdog tripped while unplugged; clearing it proves commands reach it again.
+      // Commands reach the device again: a watchdog fault latched while unplugged is cleared, and
+      // the device echoes the last command the recovered driver sent.
       if (!run_until(dev, s, o.limit_s, [&](bool) { return s.fault == 0; }, &clear))
         fail("after the replug the device never applied clear_faults (fault 0x" + std::to_string(s.fault) + ")");
+      const std::uint8_t last_low = static_cast<std::uint8_t>(dev.health().last_command_sequence & 0xFF);
+      if (!run_until(dev, s, o.limit_s, [&](bool) { return static_cast<std::uint8_t>(s.command_echo & 0xFF) == last_low; }))
+        fail("after the replug the device never echoed the last command (seq low byte " + std::to_string(last_low) +
+             ", echo " + std::to_string(s.command_echo & 0xFF) + ")");
       print_state("replugged", s, dev.health());
       std::printf("PHASE replug: the same driver recovered by itself: states flow, commands applied\n");
       return 0;
