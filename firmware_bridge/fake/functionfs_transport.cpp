@@ -5,11 +5,15 @@
 #include <linux/usb/ch9.h>
 #include <linux/usb/functionfs.h>
 #include <poll.h>
+#include <pthread.h>
+#include <signal.h>
 #include <sys/eventfd.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -25,6 +29,7 @@ struct FunctionFsTransport::Shared {
   std::deque<device::WireFrame> rx, tx;
   std::atomic<std::uint32_t> errors{device::kDisconnected};  // until the host enables the function
   std::atomic<bool> stop{false};
+  std::atomic<bool> reader_done{false}, writer_done{false};
   std::thread reader, writer;
 };
 
@@ -54,7 +59,38 @@ Descriptors::Set descriptor_set(std::uint16_t max_packet) {
   return s;
 }
 
+// Shutdown. FunctionFS endpoint files have no poll() and no non-blocking transfers (O_NONBLOCK
+// only refuses to wait for the host to enable the function): a write on ep_in blocks until the
+// host reads, a read on ep_out until it writes, and close() from another thread does not end a
+// call in progress. Both waits are interruptible, though (f_fs.c ffs_epfile_io: an interrupted
+// transfer is dequeued and the call returns EINTR), so the destructor sends this signal to the
+// I/O threads; its handler does nothing and is installed without SA_RESTART.
+constexpr int kWakeSignal = SIGUSR2;
+
+void on_wake_signal(int) {}
+
+void install_wake_signal() {
+  static const bool installed = [] {
+    struct sigaction sa {};
+    sa.sa_handler = on_wake_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = 0;  // no SA_RESTART: the blocked endpoint call must return EINTR
+    return sigaction(kWakeSignal, &sa, nullptr) == 0;
+  }();
+  if (!installed) throw device::TransportError("FunctionFS: cannot install the shutdown signal handler");
+}
+
+// The I/O threads take only the wake signal: the program's SIGINT/SIGTERM go to its main thread.
+void block_process_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  sigaddset(&set, SIGINT);
+  sigaddset(&set, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &set, nullptr);
+}
+
 void reader_loop(std::shared_ptr<FunctionFsTransport::Shared> s) {
+  block_process_signals();
   while (!s->stop) {
     device::WireFrame frame;
     ssize_t n = ::read(s->ep_out, frame.data, sizeof frame.data);
@@ -65,14 +101,16 @@ void reader_loop(std::shared_ptr<FunctionFsTransport::Shared> s) {
       else s->errors |= device::kRxOverflow;
       std::uint64_t one = 1;
       (void)!::write(s->event_fd, &one, sizeof one);
-    } else if (n < 0 && !s->stop) {
+    } else if (n < 0 && errno != EINTR && !s->stop) {
       s->errors |= device::kDisconnected;  // ESHUTDOWN: not enabled by the host (yet)
       ::usleep(5000);
     }
   }
+  s->reader_done = true;
 }
 
 void writer_loop(std::shared_ptr<FunctionFsTransport::Shared> s) {
+  block_process_signals();
   std::unique_lock<std::mutex> lock(s->mutex);
   while (!s->stop) {
     s->tx_ready.wait(lock, [&] { return s->stop || !s->tx.empty(); });
@@ -80,9 +118,30 @@ void writer_loop(std::shared_ptr<FunctionFsTransport::Shared> s) {
     device::WireFrame frame = s->tx.front();
     s->tx.pop_front();
     lock.unlock();
-    if (::write(s->ep_in, frame.data, frame.length) != frame.length) s->errors |= device::kTxFailed;
+    // Blocks while the host does not read. EINTR is the destructor's wake-up (or, before stop,
+    // a stray signal: the packet is dropped like any that an IN FIFO could not take).
+    if (::write(s->ep_in, frame.data, frame.length) != frame.length && !s->stop) s->errors |= device::kTxFailed;
     lock.lock();
   }
+  s->writer_done = true;
+}
+
+// Wakes `thread` with the wake signal until it reports `done` (a signal sent just before the
+// thread enters its blocking call is not seen by that call, hence the repeats), then joins it.
+// False if it did not end within `limit_ms`; it is then left detached.
+bool stop_thread(std::thread& thread, const std::atomic<bool>& done, int limit_ms) {
+  if (!thread.joinable()) return true;
+  for (int waited_ms = 0; !done; waited_ms += 5) {
+    if (waited_ms >= limit_ms) {
+      thread.detach();
+      return false;
+    }
+    if (waited_ms % 20 == 0) pthread_kill(thread.native_handle(), kWakeSignal);
+    timespec nap{0, 5'000'000};
+    nanosleep(&nap, nullptr);
+  }
+  thread.join();
+  return true;
 }
 
 }  // namespace
@@ -129,19 +188,30 @@ FunctionFsTransport::FunctionFsTransport(const std::string& mount_dir)
   }
   int flags = ::fcntl(s.ep0, F_GETFL);
   ::fcntl(s.ep0, F_SETFL, flags | O_NONBLOCK);  // events are polled from receive()
+  install_wake_signal();
   s.reader = std::thread(reader_loop, shared_);
   s.writer = std::thread(writer_loop, shared_);
 }
 
 FunctionFsTransport::~FunctionFsTransport() {
   Shared& s = *shared_;
-  s.stop = true;
+  {
+    std::lock_guard<std::mutex> lock(s.mutex);
+    s.stop = true;
+  }
   s.tx_ready.notify_all();
-  ::close(s.ep0);  // the function goes away: blocked endpoint I/O returns and the threads end
+  // Bounded: each thread is either waiting on the queue (woken above) or blocked in endpoint
+  // I/O that the wake signal interrupts, so this takes milliseconds, also when the host stopped
+  // reading long ago (the case that used to hang SIGTERM).
+  const bool writer_ended = stop_thread(s.writer, s.writer_done, 2000);
+  const bool reader_ended = stop_thread(s.reader, s.reader_done, 2000);
+  if (!writer_ended || !reader_ended)
+    std::fprintf(stderr, "FunctionFS %s: an endpoint thread did not end within 2 s; left detached\n",
+                 mount_dir_.c_str());
   ::close(s.ep_in);
   ::close(s.ep_out);
-  s.reader.detach();  // they hold the shared state; a read that never returns cannot hang the exit
-  if (s.writer.joinable()) s.writer.join();
+  ::close(s.ep0);  // last: the function goes away once every endpoint file is closed
+  ::close(s.event_fd);
 }
 
 void FunctionFsTransport::service_ep0() {

@@ -3,8 +3,11 @@
 // hardware-in-the-loop guest, so the host's libusb driver opens a real USB device by VID:PID.
 // The gadget itself (VID:PID 1209:4846, configuration, UDC binding) is set up through configfs by
 // whoever mounts FunctionFS; this class writes the descriptors to ep0 and moves packets.
-// Endpoint file I/O blocks, so a reader and a writer thread feed queues; the fake device is not
-// the real-time loop. Elsewhere opening fails with a message naming the missing piece.
+// Endpoint file I/O blocks (endpoint files have no poll() and no non-blocking transfers), so a
+// reader and a writer thread feed queues; the fake device is not the real-time loop. The
+// destructor interrupts a transfer blocked on a host that stopped reading with a thread-directed
+// SIGUSR2 (handler installed without SA_RESTART: the call returns EINTR) and joins both threads,
+// so SIGTERM always ends the program. Elsewhere opening fails with a message naming the missing piece.
 #pragma once
 
 #include <memory>

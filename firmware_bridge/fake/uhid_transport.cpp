@@ -37,9 +37,11 @@ UhidTransport::UhidTransport(const std::uint8_t* descriptor, std::size_t descrip
   event.type = UHID_CREATE2;
   std::strncpy(reinterpret_cast<char*>(event.u.create2.name), name.c_str(), sizeof event.u.create2.name - 1);
   event.u.create2.rd_size = static_cast<std::uint16_t>(descriptor_size);
-  // BUS_VIRTUAL: hidapi's hidraw backend skips a BUS_USB hidraw node without a USB parent device;
-  // a virtual one is listed (bus type "unknown") and opened by VID:PID like the real arm
-  event.u.create2.bus = 0x06;
+  // BUS_USB, as the real arm (a USB HID device): hidapi's hidraw backend lists hidraw nodes of
+  // the USB, Bluetooth, I2C and SPI buses only (0.13, Debian 12, skips BUS_VIRTUAL), so only a
+  // USB one is found by the rig's VID:PID address. Its missing USB parent costs nothing but the
+  // manufacturer/serial strings, which the driver does not use.
+  event.u.create2.bus = 0x03;  // BUS_USB (<linux/input.h>)
   event.u.create2.vendor = vendor;
   event.u.create2.product = product;
   event.u.create2.version = 0x0100;

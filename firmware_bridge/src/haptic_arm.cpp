@@ -85,6 +85,13 @@ void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated)
 
 bool HapticArm::poll(DeviceState& out) {
   bool updated = false;
+  if (const std::uint32_t r = link_->transport().reconnects(); r != reconnects_seen_) {
+    // The link came back (a replugged cable, a restarted bus): the device's STATE counter went
+    // on, or restarted, meanwhile. Accept its next number as the new reference instead of
+    // dropping up to half a modulus of states as "older" (gaps counted so far are kept).
+    reconnects_seen_ = r;
+    state_seq_.started = 0;
+  }
   hf_message m;
   std::uint64_t now = 0;
   while (link_->receive(m) == Io::ok) {

@@ -1,92 +1,180 @@
 // USB bulk transport over libusb's asynchronous API: IN transfers stay submitted, completions
 // land in a small ring during service(), which polls libusb's events with a zero timeout: no
-// thread, no busy wait, no blocking call in the 1 kHz loop.
+// thread in the I/O path, no busy wait, no blocking call in the 1 kHz loop.
+//
+// Transfers are torn down by libusb's rule (usb_transfer_book.hpp): stop resubmitting, cancel,
+// handle events until every callback has returned, then free and close. An unplugged device is
+// reported as kDisconnected and the driver recovers by itself: once the dead connection's
+// transfers have all returned, a ReopenWorker thread (it never touches a live connection)
+// disposes of it and opens the device again by VID:PID every 200 ms; service() adopts the new
+// connection with a single atomic exchange, so the loop never blocks on it.
 #include <libusb-1.0/libusb.h>
 #include <sys/stat.h>
+#include <time.h>
 
 #include <array>
+#include <cstdio>
 #include <cstring>
 
+#include "hapfluid/device/reopen_worker.hpp"
+#include "hapfluid/device/usb_transfer_book.hpp"
 #include "hapfluid/device/usb_transports.hpp"
 
 namespace hapfluid::device {
 
 namespace {
 
-constexpr int kInTransfers = 4;
-constexpr int kOutTransfers = 8;
-constexpr int kRing = 64;  // packets; 64 ms of state at 1 kHz
+using Book = UsbTransferBook;
+constexpr int kRing = 64;             // packets; 64 ms of state at 1 kHz
+constexpr int kPacketBytes = 64;      // one protocol packet per transfer (protocol.md 4.5)
+constexpr int kCloseLimitMs = 2000;   // cancelled transfers return within ms; this only bounds a broken stack
+
+Book::Status status_of(libusb_transfer_status s) {
+  switch (s) {
+    case LIBUSB_TRANSFER_COMPLETED: return Book::Status::completed;
+    case LIBUSB_TRANSFER_CANCELLED: return Book::Status::cancelled;
+    case LIBUSB_TRANSFER_NO_DEVICE: return Book::Status::no_device;
+    default: return Book::Status::failed;  // error, timed out, stall, overflow
+  }
+}
+
+// One opened device. Each has its own libusb context: a fresh context enumerates the bus anew,
+// so a replugged device is found also where no udev daemon feeds libusb's hotplug list.
+struct Connection {
+  libusb_context* context = nullptr;
+  libusb_device_handle* handle = nullptr;
+  std::uint8_t endpoint_in = kBulkEndpointIn;
+  std::uint8_t endpoint_out = kBulkEndpointOut;
+  std::array<libusb_transfer*, Book::kIn> in{};
+  std::array<libusb_transfer*, Book::kOut> out{};
+};
+
+// Only once nothing of `c` is in flight (libusb would touch freed transfers otherwise).
+void dispose(Connection* c) {
+  if (!c) return;
+  for (auto* t : c->in) libusb_free_transfer(t);
+  for (auto* t : c->out) libusb_free_transfer(t);
+  if (c->handle) {
+    libusb_release_interface(c->handle, kBulkInterface);
+    libusb_close(c->handle);
+  }
+  if (c->context) libusb_exit(c->context);
+  delete c;
+}
+
+// The device's bulk endpoints on interface 0, from its descriptors: a gadget's UDC may assign
+// other addresses than the nominal 0x01/0x81 (FunctionFS on dummy_hcd does).
+void find_bulk_endpoints(Connection& c) {
+  libusb_config_descriptor* config = nullptr;
+  if (libusb_get_active_config_descriptor(libusb_get_device(c.handle), &config) != 0) return;
+  for (int a = 0; config->bNumInterfaces > kBulkInterface && a < config->interface[kBulkInterface].num_altsetting; ++a) {
+    const libusb_interface_descriptor& alt = config->interface[kBulkInterface].altsetting[a];
+    for (int e = 0; e < alt.bNumEndpoints; ++e) {
+      const libusb_endpoint_descriptor& ep = alt.endpoint[e];
+      if ((ep.bmAttributes & LIBUSB_TRANSFER_TYPE_MASK) != LIBUSB_TRANSFER_TYPE_BULK) continue;
+      if (ep.bEndpointAddress & LIBUSB_ENDPOINT_IN) c.endpoint_in = ep.bEndpointAddress;
+      else c.endpoint_out = ep.bEndpointAddress;
+    }
+  }
+  libusb_free_config_descriptor(config);
+}
+
+// Opens VID:PID and claims the bulk interface; throws TransportError naming the cause and fix.
+// Blocks and allocates: the constructor and the reconnect thread only.
+Connection* connect(std::uint16_t vendor, std::uint16_t product, const std::string& address) {
+  auto* c = new Connection;
+  int r = libusb_init(&c->context);
+  if (r != 0) {
+    c->context = nullptr;
+    dispose(c);
+    throw TransportError(std::string("libusb could not initialise (") + libusb_strerror(r) +
+                         "): this machine exposes no USB host (no /dev/bus/usb?); use the loopback transport");
+  }
+  c->handle = libusb_open_device_with_vid_pid(c->context, vendor, product);
+  if (!c->handle) {
+    dispose(c);
+    struct stat st {};
+    std::string why = ::stat("/dev/bus/usb", &st) == 0
+                          ? "is it plugged in, and does the udev rule firmware_bridge/udev/70-hapfluid.rules "
+                            "give you access?"
+                          : "this kernel exposes no USB devices (no /dev/bus/usb); for tests load dummy_hcd "
+                            "and usb_f_fs, or use the loopback transport";
+    throw TransportError("libusb: no USB device " + address + " could be opened: " + why);
+  }
+  libusb_set_auto_detach_kernel_driver(c->handle, 1);
+  r = libusb_claim_interface(c->handle, kBulkInterface);
+  if (r != 0) {
+    libusb_close(c->handle);
+    c->handle = nullptr;
+    dispose(c);
+    throw TransportError("libusb: cannot claim interface 0 of " + address + ": " + libusb_strerror(r) +
+                         " (another program holds it?)");
+  }
+  find_bulk_endpoints(*c);
+  for (auto& t : c->in) t = libusb_alloc_transfer(0);
+  for (auto& t : c->out) t = libusb_alloc_transfer(0);
+  return c;
+}
 
 class LibusbTransport final : public Transport {
  public:
-  explicit LibusbTransport(const std::string& address) : address_(address) {
-    std::uint16_t vendor = 0, product = 0;
-    parse_vid_pid(address, vendor, product);
-    int r = libusb_init(&context_);
-    if (r != 0)
-      throw TransportError(std::string("libusb could not initialise (") + libusb_strerror(r) +
-                           "): this machine exposes no USB host (no /dev/bus/usb?); use the loopback transport");
-    handle_ = libusb_open_device_with_vid_pid(context_, vendor, product);
-    if (!handle_) {
-      struct stat st {};
-      std::string why = ::stat("/dev/bus/usb", &st) == 0
-                            ? "is it plugged in, and does the udev rule firmware_bridge/udev/70-hapfluid.rules "
-                              "give you access?"
-                            : "this kernel exposes no USB devices (no /dev/bus/usb); for tests load dummy_hcd "
-                              "and usb_f_fs, or use the loopback transport";
-      libusb_exit(context_);
-      throw TransportError("libusb: no USB device " + address + " could be opened: " + why);
-    }
-    libusb_set_auto_detach_kernel_driver(handle_, 1);
-    r = libusb_claim_interface(handle_, kBulkInterface);
-    if (r != 0) {
-      libusb_close(handle_);
-      libusb_exit(context_);
-      throw TransportError("libusb: cannot claim interface 0 of " + address + ": " + libusb_strerror(r) +
-                           " (another program holds it?)");
-    }
-    find_bulk_endpoints();
-    for (auto& slot : in_) {
-      slot.transfer = libusb_alloc_transfer(0);
-      libusb_fill_bulk_transfer(slot.transfer, handle_, endpoint_in_, slot.buffer, sizeof slot.buffer,
-                                &LibusbTransport::on_in, this, 0);
-      if (libusb_submit_transfer(slot.transfer) != 0) errors_ |= kDisconnected;
-      else ++pending_;
-    }
-    for (auto& slot : out_) slot.transfer = libusb_alloc_transfer(0);
+  explicit LibusbTransport(const std::string& address)
+      : address_(address),
+        reopen_([this]() -> Connection* {
+                  try {
+                    return connect(vendor_, product_, address_);
+                  } catch (const TransportError&) {
+                    return nullptr;  // not back yet
+                  }
+                },
+                dispose) {
+    parse_vid_pid(address, vendor_, product_);
+    for (int i = 0; i < Book::kIn; ++i) in_refs_[i] = {this, i};
+    for (int i = 0; i < Book::kOut; ++i) out_refs_[i] = {this, i};
+    live_ = connect(vendor_, product_, address);
+    start_streaming();
   }
 
   ~LibusbTransport() override {
-    for (auto& slot : in_) libusb_cancel_transfer(slot.transfer);
-    for (auto& slot : out_)
-      if (slot.busy) libusb_cancel_transfer(slot.transfer);
-    timeval tv{0, 10000};
-    for (int i = 0; i < 100 && (pending_ > 0 || busy_out()); ++i)
-      libusb_handle_events_timeout_completed(context_, &tv, nullptr);
-    for (auto& slot : in_) libusb_free_transfer(slot.transfer);
-    for (auto& slot : out_) libusb_free_transfer(slot.transfer);
-    libusb_release_interface(handle_, kBulkInterface);
-    libusb_close(handle_);
-    libusb_exit(context_);
-  }
+    // Closing: no callback resubmits from here on; cancel what is in flight and handle events
+    // until every callback has returned. Only then may the transfers be freed.
+    book_.begin_close();
+    if (live_) {
+      cancel_in_flight();
+      timeval tick{0, 10000};
+      for (int waited_ms = 0; !book_.quiescent() && waited_ms < kCloseLimitMs; waited_ms += 10)
+        libusb_handle_events_timeout_completed(live_->context, &tick, nullptr);
+    }
+    if (live_ && !book_.quiescent()) {
+      // Never free a transfer libusb still owns: leak this connection rather than corrupt memory.
+      std::fprintf(stderr, "libusb %s: %d IN / %d OUT transfers did not return within %d ms of cancelling; "
+                   "the connection is left open\n", address_.c_str(), book_.in_flight(), book_.out_flight(),
+                   kCloseLimitMs);
+    } else {
+      dispose(live_);
+    }
+  }  // then reopen_ stops its thread and disposes of any connection it still holds
 
   Io send(const WireFrame& frame) override {
     service();
-    for (auto& slot : out_) {
-      if (slot.busy) continue;
-      std::memcpy(slot.buffer, frame.data, frame.length);
-      libusb_fill_bulk_transfer(slot.transfer, handle_, endpoint_out_, slot.buffer, frame.length,
-                                &LibusbTransport::on_out, &slot, 100);
-      slot.owner = this;
-      if (libusb_submit_transfer(slot.transfer) != 0) {
-        errors_ |= kDisconnected;
-        return Io::error;
-      }
-      slot.busy = true;
-      return Io::ok;
+    const int slot = book_.free_out_slot();
+    if (slot < 0) {
+      if (book_.phase() != Book::Phase::streaming) return Io::error;  // gone: kDisconnected is set
+      errors_ |= kTxFailed;  // eight commands in flight: the device stopped reading
+      return Io::error;
     }
-    errors_ |= kTxFailed;  // eight commands in flight: the device stopped reading
-    return Io::error;
+    std::memcpy(out_buffer_[slot], frame.data, frame.length);
+    libusb_transfer* t = live_->out[slot];
+    libusb_fill_bulk_transfer(t, live_->handle, live_->endpoint_out, out_buffer_[slot], frame.length,
+                              &LibusbTransport::on_out, &out_refs_[slot], 100);
+    const int r = libusb_submit_transfer(t);
+    if (r != 0) {
+      book_.submit_failed(r == LIBUSB_ERROR_NO_DEVICE);
+      errors_ |= r == LIBUSB_ERROR_NO_DEVICE ? kDisconnected : kTxFailed;
+      return Io::error;
+    }
+    book_.submitted_out(slot);
+    return Io::ok;
   }
 
   Io receive(WireFrame& frame) override {
@@ -98,87 +186,108 @@ class LibusbTransport final : public Transport {
   }
 
   void service() override {
+    if (!live_) {
+      // Unplugged: adopt the connection the reconnect thread opened, if any (one atomic exchange).
+      if (Connection* c = reopen_.take()) adopt(c);
+      return;
+    }
     timeval zero{0, 0};
-    libusb_handle_events_timeout_completed(context_, &zero, nullptr);
+    libusb_handle_events_timeout_completed(live_->context, &zero, nullptr);
+    if (book_.phase() != Book::Phase::lost) return;
+    errors_ |= kDisconnected;
+    if (!cancelled_) {  // the rest of the transfers end now rather than by their own errors
+      cancel_in_flight();
+      cancelled_ = true;
+    }
+    if (book_.quiescent()) {  // every callback returned: hand the dead connection over, reconnect
+      reopen_.retire(live_);
+      live_ = nullptr;
+    }
   }
+
   int poll_fd() const override { return -1; }
   std::uint32_t error_flags() const override { return errors_; }
   void clear_error_flags() override { errors_ = 0; }
+  std::uint32_t reconnects() const override { return reconnects_; }
   std::string describe() const override { return "USB bulk (libusb) " + address_; }
 
  private:
-  struct InSlot {
-    libusb_transfer* transfer = nullptr;
-    unsigned char buffer[64];
-  };
-  struct OutSlot {
-    libusb_transfer* transfer = nullptr;
-    unsigned char buffer[64];
-    bool busy = false;
-    LibusbTransport* owner = nullptr;
+  struct SlotRef {
+    LibusbTransport* self = nullptr;
+    int slot = 0;
   };
 
-  // The device's bulk endpoints on interface 0, from its descriptors: a gadget's UDC may assign
-  // other addresses than the nominal 0x01/0x81 (FunctionFS on dummy_hcd does).
-  void find_bulk_endpoints() {
-    libusb_config_descriptor* config = nullptr;
-    if (libusb_get_active_config_descriptor(libusb_get_device(handle_), &config) != 0) return;
-    for (int a = 0; config->bNumInterfaces > kBulkInterface && a < config->interface[kBulkInterface].num_altsetting; ++a) {
-      const libusb_interface_descriptor& alt = config->interface[kBulkInterface].altsetting[a];
-      for (int e = 0; e < alt.bNumEndpoints; ++e) {
-        const libusb_endpoint_descriptor& ep = alt.endpoint[e];
-        if ((ep.bmAttributes & LIBUSB_TRANSFER_TYPE_MASK) != LIBUSB_TRANSFER_TYPE_BULK) continue;
-        if (ep.bEndpointAddress & LIBUSB_ENDPOINT_IN) endpoint_in_ = ep.bEndpointAddress;
-        else endpoint_out_ = ep.bEndpointAddress;
-      }
+  void start_streaming() {
+    for (int i = 0; i < Book::kIn; ++i) {
+      libusb_fill_bulk_transfer(live_->in[i], live_->handle, live_->endpoint_in, in_buffer_[i], kPacketBytes,
+                                &LibusbTransport::on_in, &in_refs_[i], 0);
+      const int r = libusb_submit_transfer(live_->in[i]);
+      if (r == 0) book_.submitted_in(i);
+      else book_.submit_failed(true);
     }
-    libusb_free_config_descriptor(config);
+    if (book_.phase() == Book::Phase::lost) errors_ |= kDisconnected;
   }
 
-  bool busy_out() const {
-    for (const auto& slot : out_)
-      if (slot.busy) return true;
-    return false;
+  void adopt(Connection* c) {
+    live_ = c;
+    book_.restart();  // lost and quiescent, checked before the old connection was retired
+    cancelled_ = false;
+    errors_ &= ~kDisconnected;
+    ++reconnects_;
+    start_streaming();
+  }
+
+  void cancel_in_flight() {
+    for (int i = 0; i < Book::kIn; ++i)
+      if (book_.in_busy(i)) libusb_cancel_transfer(live_->in[i]);
+    for (int i = 0; i < Book::kOut; ++i)
+      if (book_.out_busy(i)) libusb_cancel_transfer(live_->out[i]);
   }
 
   static void LIBUSB_CALL on_in(libusb_transfer* transfer) {
-    auto* self = static_cast<LibusbTransport*>(transfer->user_data);
-    if (transfer->status == LIBUSB_TRANSFER_COMPLETED && transfer->actual_length > 0) {
+    const auto* ref = static_cast<const SlotRef*>(transfer->user_data);
+    LibusbTransport* self = ref->self;
+    const Book::InAction action = self->book_.completed_in(ref->slot, status_of(transfer->status));
+    if (action.deliver && transfer->actual_length > 0) {
       if (self->head_ - self->tail_ >= kRing) {
         self->errors_ |= kRxOverflow;
         ++self->tail_;  // keep the newest: the loop wants the latest state
       }
       WireFrame& frame = self->ring_[self->head_ % kRing];
+      frame.can_id = 0;
+      frame.fd = false;
       frame.length = static_cast<std::uint8_t>(transfer->actual_length);
       std::memcpy(frame.data, transfer->buffer, frame.length);
       ++self->head_;
     }
-    if (transfer->status == LIBUSB_TRANSFER_NO_DEVICE || transfer->status == LIBUSB_TRANSFER_CANCELLED ||
-        libusb_submit_transfer(transfer) != 0) {
-      if (transfer->status != LIBUSB_TRANSFER_CANCELLED) self->errors_ |= kDisconnected;
-      --self->pending_;
+    if (action.resubmit) {
+      if (libusb_submit_transfer(transfer) == 0) self->book_.submitted_in(ref->slot);
+      else self->book_.submit_failed(true);  // a bulk IN that cannot be queued: the device is unusable
     }
+    if (self->book_.phase() == Book::Phase::lost) self->errors_ |= kDisconnected;
   }
 
   static void LIBUSB_CALL on_out(libusb_transfer* transfer) {
-    auto* slot = static_cast<OutSlot*>(transfer->user_data);
-    slot->busy = false;
-    if (transfer->status == LIBUSB_TRANSFER_NO_DEVICE) slot->owner->errors_ |= kDisconnected;
-    else if (transfer->status != LIBUSB_TRANSFER_COMPLETED && transfer->status != LIBUSB_TRANSFER_CANCELLED)
-      slot->owner->errors_ |= kTxFailed;
+    const auto* ref = static_cast<const SlotRef*>(transfer->user_data);
+    LibusbTransport* self = ref->self;
+    if (self->book_.completed_out(ref->slot, status_of(transfer->status))) self->errors_ |= kTxFailed;
+    if (self->book_.phase() == Book::Phase::lost) self->errors_ |= kDisconnected;
   }
 
   std::string address_;
-  libusb_context* context_ = nullptr;
-  libusb_device_handle* handle_ = nullptr;
-  std::array<InSlot, kInTransfers> in_{};
-  std::array<OutSlot, kOutTransfers> out_{};
+  std::uint16_t vendor_ = 0, product_ = 0;
+  Connection* live_ = nullptr;  // owned by the loop thread
+  Book book_;
+  bool cancelled_ = false;
+  std::array<SlotRef, Book::kIn> in_refs_{};
+  std::array<SlotRef, Book::kOut> out_refs_{};
+  unsigned char in_buffer_[Book::kIn][kPacketBytes] = {};
+  unsigned char out_buffer_[Book::kOut][kPacketBytes] = {};
   std::array<WireFrame, kRing> ring_{};
   std::uint64_t head_ = 0, tail_ = 0;
-  std::uint8_t endpoint_in_ = kBulkEndpointIn;
-  std::uint8_t endpoint_out_ = kBulkEndpointOut;
-  int pending_ = 0;
   std::uint32_t errors_ = 0;
+  std::uint32_t reconnects_ = 0;
+  ReopenWorker<Connection> reopen_;  // last: its thread stops before anything above goes
 };
 
 }  // namespace

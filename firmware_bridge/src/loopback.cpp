@@ -128,6 +128,7 @@ bool LoopbackTransport::reconnect() {
   ::close(fd_);
   fd_ = fd;
   errors_ &= ~kDisconnected;
+  ++reconnects_;
   return true;
 }
 

@@ -83,7 +83,6 @@ while IFS=$'\t' read -r name limit script; do
     names+=("$name") statuses+=("$st") durations+=("$dur") messages+=("$msg")
     write_reports
     echo "HIL-TEST [$idx/$total] $name: ${st^^} (${dur} s guest time)${msg:+ - $msg}" >/dev/console
-    grep -h '^KNOWN-BUG' "$res/logs/$name.log" | sort -u | sed "s/^/HIL-KNOWN-BUG $name: /" >/dev/console
 done <"$res/plan.tsv"
 
 write_reports

@@ -2,7 +2,9 @@
 # The project's fake arm as a USB bulk device: a configfs gadget 1209:4846 whose FunctionFS
 # function the fake device drives (one vendor interface, bulk IN + OUT) on dummy_hcd; the host's
 # libusb driver finds it by VID:PID, streams states and sends commands. Unbinding the UDC (the
-# cable pulled) must be reported as disconnected; after rebinding the driver must reopen it.
+# cable pulled) must be reported as disconnected; after rebinding the same driver must recover by
+# itself (haptic-rt opens its devices once). Every close of a streaming driver must be clean, and
+# the fake device must stop on SIGTERM although the host stopped reading its IN endpoint.
 set -eu
 . "$HIL_GUEST/lib.sh"
 ffs_gadget hapfluid 1209 4846 /run/ffs-hapfluid
@@ -19,11 +21,11 @@ done
 step "gadget bound"
 udc=/sys/kernel/config/usb_gadget/hapfluid/UDC
 device_check --transport usb_bulk --address 1209:4846 --force-n 1.2 --expect unplug \
-    --unplug-cmd "echo '' > $udc" --replug-cmd "echo dummy_udc.0 > $udc" \
+    --unplug-cmd "echo '' > $udc" --replug-cmd "echo dummy_udc.0 > $udc" --recover self \
     || { cat fake.out; fail "host driver checks over libusb"; }
 step "unplug/replug checks done"
 device_check --transport usb_bulk --address 1209:4846 --expect watchdog \
     || { cat fake.out; fail "watchdog over libusb"; }
 stop_pid "$FAKE_PID" "haptic-fake-device (usb_bulk, FunctionFS)"
 cat fake.out
-pass "fake arm as a FunctionFS gadget <-> libusb driver: states, commands, watchdog, unplug reported, replug reopened"
+pass "fake arm as a FunctionFS gadget <-> libusb driver: states, commands, watchdog, unplug reported, recovered after replug, clean close and stop"

@@ -12,7 +12,11 @@
 //      --expect bus-off:  the device's bus-off error frames must reach health().transport_errors,
 //                and states must flow again after the controller restarts.
 //      --expect unplug:   run --unplug-cmd; the driver must report disconnected; run
-//                --replug-cmd; reopening by the same address must give states again.
+//                --replug-cmd; then, with --recover self, the same Device must recover by
+//                itself (what haptic-rt relies on: it opens its devices once): states flow,
+//                health().connected again, and a clear-faults command is applied; with
+//                --recover reopen (default) a supervisor drops the device and reopening by the
+//                same address must give states again.
 //   spacemouse (--kind spacemouse): states from 3Dconnexion reports; the pose must move 2 mm.
 #include <time.h>
 
@@ -54,6 +58,7 @@ struct Options {
   double force_n = 1.5;
   std::string expect;
   std::string unplug_cmd, replug_cmd;
+  std::string recover = "reopen";
   double limit_s = 30;
 };
 
@@ -96,14 +101,22 @@ void print_state(const char* tag, const device::DeviceState& s, const device::De
               h.connected ? "connected" : "not connected");
 }
 
+// The STATE sequence modulus on this link: classic CAN carries the low 8 bits, everything else
+// 16 (protocol.md 3). Comparing 16-bit numbers modulo 256 would call a forward jump of 128..255
+// (states dropped while nobody read, e.g. the FIFO a device flushes after a replug) "backwards".
+std::uint32_t g_sequence_modulus = 65536;
+
 int receive_states(device::Device& dev, device::DeviceState& s, int n, double limit_s, const char* phase) {
   int got = 0, backwards = 0;
   std::uint16_t last = 0;
   bool have = false;
   run_until(dev, s, limit_s, [&](bool updated) {
     if (updated) {
-      // Classic CAN carries 8-bit sequence numbers (protocol.md), so compare modulo 256.
-      if (have && static_cast<std::uint8_t>(s.sequence - last) > 0x80) ++backwards;
+      const std::uint32_t ahead = (s.sequence - last + g_sequence_modulus) % g_sequence_modulus;
+      if (have && (ahead == 0 || ahead >= g_sequence_modulus / 2)) {
+        std::printf("%s: state sequence %u after %u\n", phase, s.sequence, last);
+        ++backwards;
+      }
       last = s.sequence;
       have = true;
       ++got;
@@ -185,6 +198,26 @@ int check_arm(std::unique_ptr<device::Device>& owned, const Options& o) {
       fail("the driver never reported the unplugged device (transport_errors / connected)");
     print_state("unplugged", s, dev.health());
     std::printf("PHASE unplug: driver reported the device gone\n");
+    if (o.recover == "self") {
+      std::printf("replug: %s\n", o.replug_cmd.c_str());
+      if (std::system(o.replug_cmd.c_str()) != 0) fail("replug command failed: " + o.replug_cmd);
+      // The loop keeps polling (and commanding nothing) the same Device.
+      if (!run_until(dev, s, o.limit_s, [&](bool) { return dev.health().connected; }))
+        fail("the driver did not recover by itself after the replug (health().connected stays false, transport 0x" +
+             std::to_string(dev.health().transport_errors) + ")");
+      receive_states(dev, s, 50, o.limit_s, "after replug");
+      // Commands reach the device again: a watchdog fault latched while unplugged is cleared, and
+      // the device echoes the last command the recovered driver sent.
+      if (!run_until(dev, s, o.limit_s, [&](bool) { return s.fault == 0; }, &clear))
+        fail("after the replug the device never applied clear_faults (fault 0x" + std::to_string(s.fault) + ")");
+      const std::uint8_t last_low = static_cast<std::uint8_t>(dev.health().last_command_sequence & 0xFF);
+      if (!run_until(dev, s, o.limit_s, [&](bool) { return static_cast<std::uint8_t>(s.command_echo & 0xFF) == last_low; }))
+        fail("after the replug the device never echoed the last command (seq low byte " + std::to_string(last_low) +
+             ", echo " + std::to_string(s.command_echo & 0xFF) + ")");
+      print_state("replugged", s, dev.health());
+      std::printf("PHASE replug: the same driver recovered by itself: states flow, commands applied\n");
+      return 0;
+    }
     // Recovery as a supervisor does it: drop the dead device, then open the address again.
     owned.reset();
     std::printf("PHASE unplug: the unplugged device closed cleanly\n");
@@ -243,9 +276,16 @@ int main(int argc, char** argv) {
     else if (a == "--expect") o.expect = v;
     else if (a == "--unplug-cmd") o.unplug_cmd = v;
     else if (a == "--replug-cmd") o.replug_cmd = v;
+    else if (a == "--recover") {
+      if (v != "self" && v != "reopen") fail("--recover must be self or reopen, not " + v);
+      o.recover = v;
+    }
     else if (a == "--limit-s") o.limit_s = std::atof(v.c_str());
     else fail("unknown option " + a);
   }
+  if (o.device.transport.kind == config::TransportKind::socketcan && !o.device.transport.can_fd) g_sequence_modulus = 256;
+  if (o.device.transport.kind == config::TransportKind::loopback && o.device.transport.framing == "can")
+    g_sequence_modulus = 256;
   auto dev = open_within(o.device, o.limit_s);
   std::printf("opened %s\n", dev->name());
   int rc = o.device.kind == config::DeviceKind::spacemouse ? check_spacemouse(*dev, o) : check_arm(dev, o);

@@ -35,6 +35,7 @@ class HapticArm final : public Device {
   DeviceState latest_{};
   DeviceHealth health_{};
   hf_seq_tracker state_seq_{};
+  std::uint32_t reconnects_seen_ = 0;  // transport reconnections already accounted for
   hf_info info_{};
   bool has_info_ = false;
   std::uint32_t faults_ = 0;

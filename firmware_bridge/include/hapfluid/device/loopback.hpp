@@ -31,6 +31,7 @@ class LoopbackTransport final : public Transport {
   int poll_fd() const override { return role_ == LoopbackRole::bus ? epoll_fd_ : fd_; }
   std::uint32_t error_flags() const override { return errors_; }
   void clear_error_flags() override { errors_ = 0; }
+  std::uint32_t reconnects() const override { return reconnects_; }
   std::string describe() const override;
   int peer_count() const { return peers_; }
 
@@ -49,6 +50,7 @@ class LoopbackTransport final : public Transport {
   int epoll_fd_ = -1;  // bus: listening socket + peers, for poll_fd()
   std::uint32_t errors_ = 0;
   std::uint64_t next_reconnect_ns_ = 0;
+  std::uint32_t reconnects_ = 0;
   int peer_fd_[kMaxPeers] = {};
   int peers_ = 0;
   int next_peer_ = 0;  // round robin, so one chatty peer cannot starve the others

@@ -51,6 +51,10 @@ class Transport {
   virtual void service() {}
   virtual std::uint32_t error_flags() const = 0;
   virtual void clear_error_flags() = 0;
+  // How many times the transport re-established a lost link by itself (loopback, libusb). A
+  // driver restarts its sequence tracking when this changes: the device's counters moved on, or
+  // restarted, while the link was down.
+  virtual std::uint32_t reconnects() const { return 0; }
   virtual std::string describe() const = 0;
 };
 

@@ -1,0 +1,89 @@
+// Reopening a lost USB device without blocking the 1 kHz loop. Opening (libusb_init +
+// enumeration, hid_open) allocates and blocks for milliseconds, so a transport whose device
+// vanished hands the dead handle to this worker's thread, which closes it and calls `open` every
+// `period_ms` until it returns a handle; the loop picks that up with take(). Both directions are
+// one atomic exchange, and waking the idle thread is one futex call: no lock, no allocation, no
+// wait in the loop thread. Used by the libusb and hidapi transports; unit-tested with a fake
+// handle (tests/firmware_bridge/test_reopen_worker.cpp).
+#pragma once
+
+#include <time.h>
+
+#include <atomic>
+#include <functional>
+#include <thread>
+
+namespace hapfluid::device {
+
+template <class Handle>
+class ReopenWorker {
+ public:
+  // open: a new handle, or nullptr (not there yet); never called from the loop thread.
+  // close: releases a handle given back by retire() or never taken.
+  ReopenWorker(std::function<Handle*()> open, std::function<void(Handle*)> close, int period_ms = 200)
+      : open_(std::move(open)), close_(std::move(close)), period_ms_(period_ms), thread_([this] { run(); }) {}
+
+  ReopenWorker(const ReopenWorker&) = delete;
+  ReopenWorker& operator=(const ReopenWorker&) = delete;
+
+  // Stops the thread (an open in progress finishes first) and closes what is left.
+  ~ReopenWorker() {
+    command_.store(kStop);
+    command_.notify_one();
+    thread_.join();
+    close_if(retired_.exchange(nullptr));
+    close_if(fresh_.exchange(nullptr));
+  }
+
+  // Loop thread: `dead` (may be null) is closed by the worker, which then reopens until it succeeds.
+  void retire(Handle* dead) {
+    retired_.store(dead);
+    int idle = kIdle;
+    if (command_.compare_exchange_strong(idle, kReopen)) command_.notify_one();
+  }
+
+  // Loop thread: the reopened handle, once (then the worker idles until the next retire()).
+  Handle* take() { return fresh_.exchange(nullptr); }
+
+  // Whether the worker is still trying (for reports; not needed to use it).
+  bool reopening() const { return command_.load() == kReopen; }
+
+ private:
+  enum : int { kIdle, kReopen, kStop };
+
+  void close_if(Handle* h) {
+    if (h) close_(h);
+  }
+
+  void run() {
+    for (;;) {
+      const int command = command_.load();
+      if (command == kStop) return;
+      if (command == kIdle) {
+        command_.wait(kIdle);
+        continue;
+      }
+      close_if(retired_.exchange(nullptr));
+      if (Handle* h = open_()) {
+        fresh_.store(h);
+        int reopen = kReopen;
+        command_.compare_exchange_strong(reopen, kIdle);  // a kStop meanwhile stays
+        continue;
+      }
+      for (int ms = 0; ms < period_ms_ && command_.load() == kReopen; ms += 10) {
+        timespec nap{0, 10'000'000};
+        nanosleep(&nap, nullptr);
+      }
+    }
+  }
+
+  std::function<Handle*()> open_;
+  std::function<void(Handle*)> close_;
+  const int period_ms_;
+  std::atomic<Handle*> retired_{nullptr};
+  std::atomic<Handle*> fresh_{nullptr};
+  std::atomic<int> command_{kIdle};
+  std::thread thread_;  // last: started once everything above exists
+};
+
+}  // namespace hapfluid::device
