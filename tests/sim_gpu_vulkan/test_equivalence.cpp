@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
@@ -192,4 +193,39 @@ TEST(VulkanEquivalence, TwoSpheresInContactEqualCpuStepByStep) {
   std::printf("two spheres: largest contact force %.4g N\n", largest_contact_n);
   EXPECT_GT(largest_contact_n, 0.01) << "the spheres must touch, or contact was not compared";
   expect_no_validation_messages(gpu);
+}
+
+TEST(VulkanEquivalence, AdvanceSetsDevicePosesBeforeEverySubstep) {
+  // advance(duration, before_substep) is how a batch run or test moves a device during a frame
+  // (as CpuSolver::advance): the callback runs once before each substep with that substep's
+  // start time, and the run equals setting the pose and stepping by hand.
+  const hs::SimulationModel model =
+      hs::build_model(hapfluid::config::load_scene(scene_path("tests/sim_gpu_vulkan/scenes/spoon_small.toml")));
+  ASSERT_EQ(model.devices.size(), 1u);
+  hv::VulkanSolver by_callback(model, validated());
+  hv::VulkanSolver by_hand(model, validated());
+  auto pose_at = [&](double t) { return hs::device_state_from(hapfluid::config::evaluate_motion(model.devices[0].motion, t)); };
+  const double frame = 1.0 / 60;
+  std::vector<double> starts;
+  const int substeps = by_callback.advance(frame, [&](double t) {
+    starts.push_back(t);
+    by_callback.set_device_state(0, pose_at(t));
+  });
+  ASSERT_GE(substeps, 2) << "a frame of several substeps, or the per-substep poses were not exercised";
+  ASSERT_EQ(starts.size(), static_cast<std::size_t>(substeps));
+  const double dt = frame / substeps;
+  for (int i = 0; i < substeps; ++i) {
+    EXPECT_NEAR(starts[i], i * dt, 1e-12) << "substep " << i;
+    by_hand.set_device_state(0, pose_at(i * dt));
+    by_hand.step(dt);
+  }
+  EXPECT_NEAR(by_callback.time_s(), frame, 1e-12);
+  const hs::RigidBody& a = by_hand.model().bodies[0];
+  const hs::RigidBody& b = by_callback.model().bodies[0];
+  EXPECT_EQ(distance(a.position, b.position), 0.0);
+  EXPECT_EQ(distance(a.linear_velocity, b.linear_velocity), 0.0);
+  EXPECT_EQ(distance(by_hand.model().couplings[0].device_force, by_callback.model().couplings[0].device_force), 0.0);
+  EXPECT_GT(hs::norm(a.linear_velocity), 0.0) << "the hand must have moved the spoon";
+  expect_no_validation_messages(by_callback);
+  expect_no_validation_messages(by_hand);
 }

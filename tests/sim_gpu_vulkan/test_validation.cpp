@@ -1,6 +1,7 @@
-// The validation physics of the CPU reference's tests (tests/sim_gpu) on the Vulkan backend,
-// and statistical equivalence with the CPU over runs long enough that particle trajectories
-// have diverged (a chaotic flow amplifies float rounding) while the flow must not have.
+// Statistical equivalence of the Vulkan backend with the CPU reference over runs long enough
+// that particle trajectories have diverged (a chaotic flow amplifies float rounding) while the
+// flow must not have. The CPU suite's validation tests themselves run unchanged on the device in
+// test_cpu_suite_*.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>

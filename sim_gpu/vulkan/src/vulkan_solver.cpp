@@ -380,11 +380,20 @@ double VulkanSolver::stable_time_step() const {
   return std::min(dt, p.max_dt_s);
 }
 
-int VulkanSolver::advance(double duration_s) {
+int VulkanSolver::advance(double duration_s, const std::function<void(double)>& before_substep) {
   if (duration_s <= 0) return 0;
   const double dt_max = stable_time_step();
   const int substeps = std::max(1, static_cast<int>(std::ceil(duration_s / dt_max - 1e-9)));
-  step_many(duration_s / substeps, substeps);
+  const double dt = duration_s / substeps;
+  if (!before_substep) {
+    step_many(dt, substeps);
+    return substeps;
+  }
+  const double t0 = time_s_;
+  for (int i = 0; i < substeps; ++i) {
+    before_substep(t0 + i * dt);
+    step_many(dt, 1);
+  }
   return substeps;
 }
 

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -75,7 +76,12 @@ class VulkanSolver {
   void step(double dt) { step_many(dt, 1); }
   // `substeps` steps of dt in one submission.
   void step_many(double dt, int substeps);
-  int advance(double duration_s);
+  // Advances by `duration_s` in equal substeps no longer than stable_time_step() (as
+  // CpuSolver::advance); returns the number of substeps. before_substep(t), when given, runs
+  // before each substep with its start time (the caller sets device poses there) and the
+  // substeps are submitted one by one; without it the frame is one submission where the scene
+  // allows (no dynamic bodies) and device states are held.
+  int advance(double duration_s, const std::function<void(double)>& before_substep = {});
 
   // Downloads fluid particles (position, velocity, acceleration, density, pressure, volume,
   // viscosity, id) into model(), in the device's current (cell-sorted) order.
