@@ -1,0 +1,170 @@
+// bench_sim_cpu: steps per second of the CPU backend.
+//  - fluid pool (§6.2.1, fig. 6a): a 1 x 1 m pool 0.25 m deep at ~8k, 16k, 32k, 64k particles,
+//    1 and 2 threads;
+//  - fig. 6b: 25k particles, one floating sphere of 1k..20k particles, the pool shrinking to keep
+//    the total;
+//  - fig. 6c: 25k particles with 1..16 spheres sharing 8k body particles.
+// Usage: bench_sim_cpu --out FILE.json [--quick]. Progress on stderr; JSON records on --out.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "hapfluid/config/scene.hpp"
+#include "hapfluid/sim/cpu_solver.hpp"
+#include "hapfluid/sim/mesh_sampling.hpp"
+#include "hapfluid/sim/primitive_meshes.hpp"
+
+using namespace hapfluid;
+using namespace hapfluid::sim;
+
+namespace {
+
+struct Body { double x, y, z, radius, spacing; };
+
+// A pool of `fluid_target` particles in a 1 x 1 m box, depth set by the particle count at a
+// spacing chosen so that the full pool (pool_particles) is 0.25 m deep.
+config::Scene pool_scene(const std::filesystem::path& dir, int pool_particles, int fluid_target,
+                         const std::vector<Body>& bodies) {
+  const double s = std::cbrt(0.25 / pool_particles);
+  const double depth = fluid_target * s * s * s;
+  std::ostringstream t;
+  t << "name = \"pool\"\n[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, 0.5]\n"
+    << "[fluid]\nparticle_spacing_m = " << s << "\nspeed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n"
+    << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, " << depth << "]\n";
+  for (std::size_t i = 0; i < bodies.size(); ++i) {
+    config::save_obj(primitives::sphere_mesh(bodies[i].radius, 5), dir / ("sphere" + std::to_string(i) + ".obj"));
+    t << "[[bodies]]\nname = \"sphere" << i << "\"\nmesh = \"sphere" << i << ".obj\"\nposition_m = [" << bodies[i].x << ", "
+      << bodies[i].y << ", " << bodies[i].z << "]\ndensity_kg_m3 = 500.0\nsampling_spacing_m = " << bodies[i].spacing << "\n";
+  }
+  std::ofstream(dir / "scene.toml") << t.str();
+  return config::load_scene(dir / "scene.toml");
+}
+
+// Surface sampling spacing that gives n particles on a sphere of radius r: a first guess from
+// the area, corrected once from the count the sampler actually produces.
+double sphere_spacing(int n, double r) {
+  const auto mesh = primitives::sphere_mesh(r, 5);
+  double spacing = std::sqrt(4 * 3.14159265 * r * r / n);
+  for (int pass = 0; pass < 2; ++pass) {
+    const double got = static_cast<double>(sample_surface(mesh, 1.0, spacing, 0.5 * spacing).size());
+    spacing *= std::sqrt(got / n);
+  }
+  return spacing;
+}
+
+// A pool scene whose fluid is deepened so that fluid + body particles come to `total`
+// (bodies displace fluid: the scene is built once to count, then adjusted).
+config::Scene matched_scene(const std::filesystem::path& dir, int total, const std::vector<Body>& bodies) {
+  int fluid_target = total;
+  config::Scene scene = pool_scene(dir, total, fluid_target, bodies);
+  for (int pass = 0; pass < 2; ++pass) {
+    const SimulationModel m = build_model(scene);
+    const int have = static_cast<int>(m.fluid.size() + m.body_particles.size());
+    fluid_target += total - have;
+    scene = pool_scene(dir, total, fluid_target, bodies);
+  }
+  return scene;
+}
+
+struct Record { std::string json; };
+std::vector<Record> records;
+
+void measure(const std::string& sweep, const config::Scene& scene, int threads, int steps, const std::string& extra_params) {
+  CpuSolver solver(build_model(scene), threads);
+  const double dt = solver.stable_time_step();
+  for (int i = 0; i < 3; ++i) solver.step(dt);  // warm-up: first touches, allocations
+  const PhaseTimes before = solver.phase_times();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < steps; ++i) solver.step(dt);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const PhaseTimes after = solver.phase_times();
+  const auto& m = solver.model();
+  const std::size_t fluid = m.fluid.size(), body = m.body_particles.size();
+  const double ms = 1000 * wall / steps;
+  auto phase = [&](double a, double b) { return 1000 * (a - b) / steps; };
+  char buf[1024];
+  std::snprintf(buf, sizeof buf,
+                "{\"bench\": \"bench_sim_cpu\", \"params\": {\"backend\": \"cpu\", \"sweep\": \"%s\", \"particles\": %zu, "
+                "\"fluid_particles\": %zu, \"body_particles\": %zu, \"boundary_particles\": %zu, \"threads\": %d%s}, "
+                "\"metrics\": {\"steps_per_s\": %.3f, \"ms_per_step\": %.3f, \"particle_steps_per_s\": %.0f, "
+                "\"neighbour_search_ms\": %.3f, \"density_ms\": %.3f, \"forces_ms\": %.3f, \"bodies_ms\": %.3f, "
+                "\"integration_ms\": %.3f}}",
+                sweep.c_str(), fluid + body, fluid, body, m.wall_particle_count, threads, extra_params.c_str(), steps / wall, ms,
+                steps * static_cast<double>(fluid + body) / wall, phase(after.neighbour_search_s, before.neighbour_search_s),
+                phase(after.density_s, before.density_s), phase(after.forces_s, before.forces_s),
+                phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s));
+  records.push_back({buf});
+  std::fprintf(stderr, "bench_sim_cpu: %-5s %6zu particles (%zu body), %d thread(s): %7.2f ms/step, %6.1f steps/s "
+               "[grid %.2f, density %.2f, forces %.2f, bodies %.2f, integrate %.2f ms]\n",
+               sweep.c_str(), fluid + body, body, threads, ms, steps / wall, phase(after.neighbour_search_s, before.neighbour_search_s),
+               phase(after.density_s, before.density_s), phase(after.forces_s, before.forces_s),
+               phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out;
+  bool quick = false;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--out" && i + 1 < argc) out = argv[++i];
+    else if (a == "--quick") quick = true;
+    else {
+      std::cerr << "usage: bench_sim_cpu --out FILE.json [--quick]\n";
+      return 2;
+    }
+  }
+  if (out.empty()) {
+    std::cerr << "bench_sim_cpu: --out FILE.json is required\n";
+    return 2;
+  }
+  const auto dir = std::getenv("BENCH_KEEP_DIR") ? std::filesystem::path(std::getenv("BENCH_KEEP_DIR"))
+                                                : std::filesystem::temp_directory_path() / ("bench_sim_cpu_" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const int steps = quick ? 5 : 30;
+  try {
+    // Fluid pool, fig. 6a.
+    const std::vector<int> sizes = quick ? std::vector<int>{8000, 32000} : std::vector<int>{8000, 16000, 32000, 64000};
+    for (int n : sizes)
+      for (int threads : {1, 2}) measure("pool", pool_scene(dir, n, n, {}), threads, steps, "");
+    // Fig. 6b: one sphere of 1k..20k particles in a 25k-particle scene.
+    const int total = 25000;
+    const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};
+    for (int n : sphere_sizes) {
+      const double r = 0.15;
+      std::vector<Body> bodies = {{0.5, 0.5, 0.2, r, sphere_spacing(n, r)}};
+      measure("fig6b", matched_scene(dir, total, bodies), 2, steps,
+              ", \"bodies\": 1, \"body_particles_requested\": " + std::to_string(n));
+    }
+    // Fig. 6c: 1..16 spheres sharing 8k body particles in a 25k-particle scene.
+    const std::vector<int> counts = quick ? std::vector<int>{4} : std::vector<int>{1, 2, 4, 8, 16};
+    for (int k : counts) {
+      const int per_row = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(k))));
+      const double cell = 1.0 / per_row, r = std::min(0.15, 0.35 * cell);
+      const double spacing = sphere_spacing(8000 / k, r);
+      std::vector<Body> bodies;
+      for (int i = 0; i < k; ++i) bodies.push_back({(i % per_row + 0.5) * cell, (i / per_row + 0.5) * cell, 0.2, r, spacing});
+      measure("fig6c", matched_scene(dir, total, bodies), 2, steps, ", \"bodies\": " + std::to_string(k));
+    }
+  } catch (const std::exception& e) {
+    std::cerr << "bench_sim_cpu: " << e.what() << "\n";
+    std::filesystem::remove_all(dir);
+    return 1;
+  }
+  std::filesystem::remove_all(dir);
+  std::ofstream f(out + ".part");
+  f << "[\n";
+  for (std::size_t i = 0; i < records.size(); ++i) f << "  " << records[i].json << (i + 1 < records.size() ? ",\n" : "\n");
+  f << "]\n";
+  f.close();
+  std::filesystem::rename(out + ".part", out);
+  return 0;
+}

@@ -1,0 +1,45 @@
+// Virtual coupling (§4.4, Colgate et al. 1995): a spring-damper, linear and angular, between a
+// device handle and the grasp frame on a rigid body. The coupling wrench acts on the body; its
+// opposite is the wrench rendered on the device (Algorithm 2, lines 7 and 9). Any number of
+// devices may hold one body (bimanual, §6.4.4).
+//
+// The body step treats the coupling springs and dampers implicitly (one 6x6 solve per body), so
+// a stiff coupling on a light tool stays stable at the SPH time step.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "hapfluid/config/types.hpp"
+#include "hapfluid/sim/math.hpp"
+#include "hapfluid/sim/rigid_body.hpp"
+
+namespace hapfluid::sim {
+
+struct DeviceState {
+  Vec3 position;
+  Quat orientation;
+  Vec3 linear_velocity;
+  Vec3 angular_velocity;  // world frame
+};
+DeviceState device_state_from(const config::PoseTwist& twist);
+
+struct VirtualCoupling {
+  std::size_t device = 0;
+  std::size_t body = 0;
+  Vec3 grasp_position;     // handle position in the mesh frame, m
+  Quat grasp_orientation;  // handle orientation relative to the mesh frame
+  double linear_stiffness_n_per_m = 0, linear_damping_n_s_per_m = 0;
+  double angular_stiffness_nm_per_rad = 0, angular_damping_nm_s_per_rad = 0;
+
+  // Result of the last step: the wrench to render on the device (force at the handle, torque).
+  Vec3 device_force, device_torque;
+};
+
+// One leap-frog step of a dynamic body (Algorithm 2, lines 6-8): external force and torque
+// (fluid + contact, already summed into the body), gravity and the couplings holding it.
+// Updates the state and the couplings' device wrenches.
+void integrate_body(RigidBody& body, std::vector<VirtualCoupling*>& couplings, const std::vector<DeviceState>& devices,
+                    const Vec3& gravity, double dt);
+
+}  // namespace hapfluid::sim

@@ -1,0 +1,24 @@
+// Per-particle neighbour lists of the CPU backend: the density pass keeps the candidates within
+// h of each fluid particle (fluid, then static solids, then dynamic body particles) so the force
+// pass visits only true neighbours. One buffer per worker thread.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace hapfluid::sim::detail {
+
+struct NeighbourRange {
+  std::uint32_t offset = 0;   // into the worker's buffer
+  std::uint16_t fluid = 0;    // fluid neighbours, then
+  std::uint16_t statics = 0;  // static solid neighbours, then
+  std::uint16_t bodies = 0;   // dynamic body neighbours
+};
+
+struct NeighbourLists {
+  std::vector<std::uint32_t> indices;
+  std::size_t used = 0;
+};
+
+}  // namespace hapfluid::sim::detail

@@ -1,0 +1,38 @@
+// Files a user opens after a run: particle frames as legacy VTK (binary, ParaView), body and
+// coupling histories as CSV, run statistics as JSON. Every file is written under a temporary
+// name and renamed when complete, so a crashed run never leaves a file that looks finished.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "hapfluid/sim/model.hpp"
+
+namespace hapfluid::sim {
+
+// One frame: every particle (fluid, walls, static and dynamic bodies) with velocity, density,
+// pressure, kind (0 fluid, 1 wall, 2 body), body index (-1 for fluid and walls) and id.
+void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& model, double time_s);
+
+// A CSV file written row by row to "<file>.part" and renamed to <file> by finish().
+class CsvFile {
+ public:
+  CsvFile(std::filesystem::path file, const std::string& header);
+  ~CsvFile();
+  CsvFile(const CsvFile&) = delete;
+  CsvFile& operator=(const CsvFile&) = delete;
+  void row(const std::string& line);
+  void finish();
+
+ private:
+  std::filesystem::path file_, part_;
+  std::FILE* out_ = nullptr;
+};
+
+// Writes text to file atomically (temporary name, then rename).
+void write_text_atomically(const std::filesystem::path& file, const std::string& text);
+
+std::string json_escape(const std::string& text);
+
+}  // namespace hapfluid::sim

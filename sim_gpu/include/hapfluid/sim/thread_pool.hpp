@@ -1,0 +1,49 @@
+// A fixed-size pool of worker threads for the CPU solver. Work is split statically: the range
+// [0, count) is cut into `threads` equal contiguous chunks, chunk i always goes to worker i, and
+// each worker writes only its own outputs. Results are therefore bit-for-bit identical from run
+// to run for a given thread count (no work stealing, no atomics in the physics).
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace hapfluid::sim {
+
+class ThreadPool {
+ public:
+  // threads >= 1; the calling thread is worker 0, so threads - 1 helpers are started.
+  explicit ThreadPool(int threads);
+  ~ThreadPool();
+  ThreadPool(const ThreadPool&) = delete;
+  ThreadPool& operator=(const ThreadPool&) = delete;
+
+  int size() const { return threads_; }
+
+  // Calls fn(begin, end, worker) for each worker's chunk and returns when all are done.
+  void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t, int)>& fn);
+
+  // The chunk worker `w` of `threads` gets for `count` items: the same split parallel_for uses.
+  static void chunk(std::size_t count, int threads, int w, std::size_t& begin, std::size_t& end) {
+    begin = count * static_cast<std::size_t>(w) / static_cast<std::size_t>(threads);
+    end = count * static_cast<std::size_t>(w + 1) / static_cast<std::size_t>(threads);
+  }
+
+ private:
+  void worker_loop(int w);
+
+  int threads_;
+  std::vector<std::thread> helpers_;
+  std::mutex mutex_;
+  std::condition_variable start_cv_, done_cv_;
+  const std::function<void(std::size_t, std::size_t, int)>* job_ = nullptr;
+  std::size_t count_ = 0;
+  unsigned long generation_ = 0;
+  int pending_ = 0;
+  bool stopping_ = false;
+};
+
+}  // namespace hapfluid::sim

@@ -1,0 +1,130 @@
+#include "hapfluid/sim/outputs.hpp"
+
+#include <bit>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+#include <vector>
+
+namespace hapfluid::sim {
+namespace {
+
+[[noreturn]] void io_error(const std::string& what, const std::filesystem::path& file) {
+  throw std::runtime_error(what + " " + file.string() + ": " + std::strerror(errno));
+}
+
+// Legacy VTK binary data is big-endian.
+template <class T>
+void put_be(std::vector<char>& out, T value) {
+  static_assert(sizeof(T) == 4);
+  std::uint32_t bits;
+  std::memcpy(&bits, &value, 4);
+  if constexpr (std::endian::native == std::endian::little) bits = __builtin_bswap32(bits);
+  const char* b = reinterpret_cast<const char*>(&bits);
+  out.insert(out.end(), b, b + 4);
+}
+
+void put_text(std::vector<char>& out, const std::string& text) { out.insert(out.end(), text.begin(), text.end()); }
+
+}  // namespace
+
+void write_text_atomically(const std::filesystem::path& file, const std::string& text) {
+  const std::filesystem::path part = file.string() + ".part";
+  {
+    std::ofstream out(part, std::ios::binary);
+    if (!out) io_error("cannot write", part);
+    out << text;
+    out.flush();
+    if (!out) io_error("write failed for", part);
+  }
+  std::filesystem::rename(part, file);
+}
+
+void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m, double time_s) {
+  const FluidParticles& f = m.fluid;
+  const SortedSolids& st = m.static_solids;
+  const BodyParticles& bp = m.body_particles;
+  const std::size_t n = f.size() + st.size() + bp.size();
+  struct Point { float x, y, z, vx, vy, vz, density, pressure; std::int32_t kind, body, id; };
+  std::vector<Point> pts;
+  pts.reserve(n);
+  for (std::size_t i = 0; i < f.size(); ++i)
+    pts.push_back({f.x[i], f.y[i], f.z[i], f.vx[i], f.vy[i], f.vz[i], f.density[i], f.pressure[i], 0, -1,
+                   static_cast<std::int32_t>(f.id[i])});
+  for (std::size_t i = 0; i < st.size(); ++i) {
+    const bool wall = st.body[i] == kWall;
+    pts.push_back({st.x[i], st.y[i], st.z[i], 0, 0, 0, m.params.rest_density_kg_m3, 0,
+                   static_cast<std::int32_t>(wall ? ParticleKind::wall : ParticleKind::body), st.body[i],
+                   static_cast<std::int32_t>(st.source[i])});
+  }
+  for (std::size_t i = 0; i < bp.size(); ++i)
+    pts.push_back({bp.x[i], bp.y[i], bp.z[i], bp.vx[i], bp.vy[i], bp.vz[i], m.params.rest_density_kg_m3, bp.pressure[i],
+                   static_cast<std::int32_t>(ParticleKind::body), bp.body[i], static_cast<std::int32_t>(i)});
+
+  std::vector<char> out;
+  out.reserve(n * 60 + 1024);
+  put_text(out, "# vtk DataFile Version 3.0\nhapfluid " + m.scene_name + " t=" + std::to_string(time_s) +
+                    " s\nBINARY\nDATASET POLYDATA\nPOINTS " + std::to_string(n) + " float\n");
+  for (const Point& p : pts) put_be(out, p.x), put_be(out, p.y), put_be(out, p.z);
+  put_text(out, "\nVERTICES " + std::to_string(n) + " " + std::to_string(2 * n) + "\n");
+  for (std::size_t i = 0; i < n; ++i) put_be(out, std::int32_t{1}), put_be(out, static_cast<std::int32_t>(i));
+  put_text(out, "\nPOINT_DATA " + std::to_string(n) + "\nVECTORS velocity float\n");
+  for (const Point& p : pts) put_be(out, p.vx), put_be(out, p.vy), put_be(out, p.vz);
+  auto scalars = [&](const char* name, const char* type, auto get) {
+    put_text(out, std::string("\nSCALARS ") + name + " " + type + " 1\nLOOKUP_TABLE default\n");
+    for (const Point& p : pts) put_be(out, get(p));
+  };
+  scalars("density", "float", [](const Point& p) { return p.density; });
+  scalars("pressure", "float", [](const Point& p) { return p.pressure; });
+  scalars("kind", "int", [](const Point& p) { return p.kind; });
+  scalars("body", "int", [](const Point& p) { return p.body; });
+  scalars("id", "int", [](const Point& p) { return p.id; });
+  put_text(out, "\n");
+
+  const std::filesystem::path part = file.string() + ".part";
+  {
+    std::ofstream s(part, std::ios::binary);
+    if (!s) io_error("cannot write", part);
+    s.write(out.data(), static_cast<std::streamsize>(out.size()));
+    if (!s) io_error("write failed for", part);
+  }
+  std::filesystem::rename(part, file);
+}
+
+CsvFile::CsvFile(std::filesystem::path file, const std::string& header)
+    : file_(std::move(file)), part_(file_.string() + ".part") {
+  out_ = std::fopen(part_.c_str(), "w");
+  if (!out_) io_error("cannot write", part_);
+  row(header);
+}
+
+CsvFile::~CsvFile() {
+  if (out_) std::fclose(out_);  // left as .part: the run did not finish
+}
+
+void CsvFile::row(const std::string& line) {
+  if (std::fputs(line.c_str(), out_) < 0 || std::fputc('\n', out_) < 0) io_error("write failed for", part_);
+}
+
+void CsvFile::finish() {
+  if (std::fclose(out_) != 0) {
+    out_ = nullptr;
+    io_error("write failed for", part_);
+  }
+  out_ = nullptr;
+  std::filesystem::rename(part_, file_);
+}
+
+std::string json_escape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\', out += c;
+    else if (c == '\n') out += "\\n";
+    else if (static_cast<unsigned char>(c) < 0x20) out += ' ';
+    else out += c;
+  }
+  return out;
+}
+
+}  // namespace hapfluid::sim

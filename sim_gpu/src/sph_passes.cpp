@@ -1,0 +1,166 @@
+#include "sph_passes.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hapfluid::sim::detail {
+namespace {
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
+#define HAPFLUID_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define HAPFLUID_CLONES
+#endif
+
+// Appends the candidates of one run that lie within h (branch-free compaction) and returns
+// how many were appended. The buffer has room for the whole run.
+inline std::uint32_t collect_run(const float* x, const float* y, const float* z, std::uint32_t b, std::uint32_t e,
+                                 float xi, float yi, float zi, float h2, std::uint32_t* out) {
+  std::uint32_t n = 0;
+  for (std::uint32_t j = b; j < e; ++j) {
+    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+    out[n] = j;
+    n += (dx * dx + dy * dy + dz * dz < h2) ? 1u : 0u;
+  }
+  return n;
+}
+
+// sum over listed neighbours of w_j d^3, d = h^2 - r^2 (poly6 shape; all listed are within h).
+inline float poly6_sum(const float* x, const float* y, const float* z, const float* w, const std::uint32_t* list,
+                       std::uint32_t n, float xi, float yi, float zi, float h2) {
+  float sum = 0;
+#pragma omp simd reduction(+ : sum)
+  for (std::uint32_t k = 0; k < n; ++k) {
+    const std::uint32_t j = list[k];
+    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+    const float d = h2 - (dx * dx + dy * dy + dz * dz);
+    sum += (w ? w[j] : 1.0f) * d * d * d;
+  }
+  return sum;
+}
+
+struct Accel {
+  float x = 0, y = 0, z = 0;
+};
+
+// Fluid-fluid pair terms (see CpuSolver::compute_fluid_forces for the formulas).
+inline void fluid_terms(const FluidParticles& f, const std::uint32_t* list, std::uint32_t n, float xi, float yi, float zi,
+                        float vxi, float vyi, float vzi, float pi, float mui, const KernelConstants& k, Accel& a) {
+  float sx = 0, sy = 0, sz = 0;
+  const float *x = f.x.data(), *y = f.y.data(), *z = f.z.data(), *vx = f.vx.data(), *vy = f.vy.data(), *vz = f.vz.data();
+  const float *vol = f.volume.data(), *pr = f.pressure.data(), *mu = f.viscosity.data();
+#pragma omp simd reduction(+ : sx, sy, sz)
+  for (std::uint32_t q = 0; q < n; ++q) {
+    const std::uint32_t j = list[q];
+    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+    const float r2 = dx * dx + dy * dy + dz * dz;
+    const bool in = r2 > 0;  // a particle is in its own list (r = 0): no force on itself
+    const float r = std::sqrt(in ? r2 : k.h2);
+    const float hr = in ? k.h - r : 0.0f;
+    const float pterm = -vol[j] * (pi + pr[j]) * k.spiky_grad * hr * hr / r;
+    const float vterm = vol[j] * 0.5f * (mui + mu[j]) * k.visc_lap * hr;
+    sx += pterm * dx + vterm * (vx[j] - vxi);
+    sy += pterm * dy + vterm * (vy[j] - vyi);
+    sz += pterm * dz + vterm * (vz[j] - vzi);
+  }
+  a.x += sx, a.y += sy, a.z += sz;
+}
+
+// Fluid-solid pair terms: the solid takes the fluid particle's pressure (mirroring); walls
+// (no_slip = 0) would damp only the relative velocity along the pair direction.
+inline void solid_terms(const SortedSolids& s, const std::uint32_t* list, std::uint32_t n, float xi, float yi, float zi,
+                        float vxi, float vyi, float vzi, float pi, float mui, const KernelConstants& k, Accel& a) {
+  float sx = 0, sy = 0, sz = 0;
+  const float *x = s.x.data(), *y = s.y.data(), *z = s.z.data(), *vx = s.vx.data(), *vy = s.vy.data(), *vz = s.vz.data();
+  const float *vol = s.volume.data(), *mu = s.viscosity.data(), *ns = s.no_slip.data();
+#pragma omp simd reduction(+ : sx, sy, sz)
+  for (std::uint32_t q = 0; q < n; ++q) {
+    const std::uint32_t j = list[q];
+    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+    const float r2 = dx * dx + dy * dy + dz * dz;
+    const bool in = r2 > 0;
+    const float r = std::sqrt(in ? r2 : k.h2);
+    const float hr = in ? k.h - r : 0.0f;
+    const float pterm = -vol[j] * (pi + pi) * k.spiky_grad * hr * hr / r;
+    const float vterm = vol[j] * 0.5f * (mui + mu[j]) * k.visc_lap * hr;
+    const float dvx = vx[j] - vxi, dvy = vy[j] - vyi, dvz = vz[j] - vzi;
+    const float along = (1.0f - ns[j]) * (dvx * dx + dvy * dy + dvz * dz) / (in ? r2 : k.h2);
+    sx += pterm * dx + vterm * (ns[j] * dvx + along * dx);
+    sy += pterm * dy + vterm * (ns[j] * dvy + along * dy);
+    sz += pterm * dz + vterm * (ns[j] * dvz + along * dz);
+  }
+  a.x += sx, a.y += sy, a.z += sz;
+}
+
+// Collects the neighbours of (xi, yi, zi) in one particle set into the list buffer.
+std::uint32_t collect(const GridGeometry& g, const std::uint32_t* cell_start, const float* x, const float* y,
+                      const float* z, float xi, float yi, float zi, float h2, NeighbourLists& lists) {
+  std::uint32_t count = 0;
+  for_each_neighbour_run(g, cell_start, xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
+    if (lists.used + (e - b) > lists.indices.size()) lists.indices.resize(2 * (lists.used + (e - b)) + 1024);
+    const std::uint32_t n = collect_run(x, y, z, b, e, xi, yi, zi, h2, lists.indices.data() + lists.used);
+    lists.used += n;
+    count += n;
+  });
+  return count;
+}
+
+}  // namespace
+
+HAPFLUID_CLONES
+void density_pass(const SimulationParams& p, FluidParticles& f, const std::uint32_t* fluid_cell_start,
+                  const SortedSolids& st, const SortedSolids& bv, std::size_t begin, std::size_t end,
+                  NeighbourLists& lists, NeighbourRange* ranges) {
+  const float h2 = p.kernel.h2, mass = p.fluid_particle_mass_kg, rho0 = p.rest_density_kg_m3;
+  lists.used = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    const float xi = f.x[i], yi = f.y[i], zi = f.z[i];
+    NeighbourRange& range = ranges[i];
+    range.offset = static_cast<std::uint32_t>(lists.used);
+    const std::uint32_t nf = collect(p.grid, fluid_cell_start, f.x.data(), f.y.data(), f.z.data(), xi, yi, zi, h2, lists);
+    const std::uint32_t ns =
+        st.size() > 0 ? collect(p.grid, st.cell_start.data(), st.x.data(), st.y.data(), st.z.data(), xi, yi, zi, h2, lists) : 0;
+    const std::uint32_t nb =
+        bv.size() > 0 ? collect(p.grid, bv.cell_start.data(), bv.x.data(), bv.y.data(), bv.z.data(), xi, yi, zi, h2, lists) : 0;
+    range.fluid = static_cast<std::uint16_t>(std::min<std::uint32_t>(nf, 65535));
+    range.statics = static_cast<std::uint16_t>(std::min<std::uint32_t>(ns, 65535));
+    range.bodies = static_cast<std::uint16_t>(std::min<std::uint32_t>(nb, 65535));
+    const std::uint32_t* list = lists.indices.data() + range.offset;
+    const float fluid_sum = poly6_sum(f.x.data(), f.y.data(), f.z.data(), nullptr, list, nf, xi, yi, zi, h2);
+    float solid_sum = poly6_sum(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), list + nf, ns, xi, yi, zi, h2);
+    solid_sum += poly6_sum(bv.x.data(), bv.y.data(), bv.z.data(), bv.volume.data(), list + nf + ns, nb, xi, yi, zi, h2);
+    const float rho = p.kernel.poly6 * (mass * fluid_sum + rho0 * solid_sum);
+    f.density[i] = rho;
+    f.volume[i] = mass / rho;
+    const float pressure = p.stiffness * (rho - rho0);
+    f.pressure[i] = pressure > 0 ? pressure : 0;
+  }
+}
+
+HAPFLUID_CLONES
+float fluid_force_pass(const SimulationParams& p, FluidParticles& f, const SortedSolids& st, const SortedSolids& bv,
+                       std::size_t begin, std::size_t end, const NeighbourLists& lists, const NeighbourRange* ranges) {
+  const KernelConstants& k = p.kernel;
+  const float gx = static_cast<float>(p.gravity_m_s2.x), gy = static_cast<float>(p.gravity_m_s2.y),
+              gz = static_cast<float>(p.gravity_m_s2.z);
+  float max_accel2 = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    const float xi = f.x[i], yi = f.y[i], zi = f.z[i];
+    const float vxi = f.vx[i], vyi = f.vy[i], vzi = f.vz[i];
+    const float pi = f.pressure[i], mui = f.viscosity[i];
+    const NeighbourRange& range = ranges[i];
+    const std::uint32_t* list = lists.indices.data() + range.offset;
+    Accel a;
+    fluid_terms(f, list, range.fluid, xi, yi, zi, vxi, vyi, vzi, pi, mui, k, a);
+    solid_terms(st, list + range.fluid, range.statics, xi, yi, zi, vxi, vyi, vzi, pi, mui, k, a);
+    solid_terms(bv, list + range.fluid + range.statics, range.bodies, xi, yi, zi, vxi, vyi, vzi, pi, mui, k, a);
+    const float inv_rho = 1.0f / f.density[i];  // a = f / m = (V_p / m_p) sum = sum / rho_p
+    f.ax[i] = a.x * inv_rho + gx;
+    f.ay[i] = a.y * inv_rho + gy;
+    f.az[i] = a.z * inv_rho + gz;
+    max_accel2 = std::max(max_accel2, f.ax[i] * f.ax[i] + f.ay[i] * f.ay[i] + f.az[i] * f.az[i]);
+  }
+  return max_accel2;
+}
+
+}  // namespace hapfluid::sim::detail

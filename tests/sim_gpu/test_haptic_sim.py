@@ -1,0 +1,144 @@
+"""haptic-sim batch mode from the command line: the outputs a user opens (VTK frames, body and
+coupling CSV, stats.json), bit-for-bit repeatable runs, and clear failures without outputs
+that look complete."""
+import csv
+import json
+import subprocess
+import sys
+import pathlib
+
+sys.path.insert(0, str(pathlib.Path(__file__).parent))
+from vtk_reader import read_vtk  # noqa: E402
+
+BOX_OBJ = """v 0 0 0
+v 0.04 0 0
+v 0 0.04 0
+v 0.04 0.04 0
+v 0 0 0.06
+v 0.04 0 0.06
+v 0 0.04 0.06
+v 0.04 0.04 0.06
+f 1 3 2
+f 2 3 4
+f 5 6 7
+f 6 8 7
+f 1 2 5
+f 2 6 5
+f 3 7 4
+f 4 7 8
+f 1 5 3
+f 3 5 7
+f 2 4 6
+f 4 8 6
+"""
+
+SCENE = """
+name = "tiny_stir"
+duration_s = 0.1
+[domain]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.16, 0.1, 0.12]
+[fluid]
+particle_spacing_m = 0.01
+speed_of_sound_m_s = 10.0
+viscosity_pa_s = 1.0
+[[fluid.blocks]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.16, 0.1, 0.06]
+[[bodies]]
+name = "paddle"
+mesh = "box.obj"
+position_m = [0.06, 0.03, 0.03]
+density_kg_m3 = 800.0
+[[devices]]
+name = "hand"
+start_position_m = [0.08, 0.05, 0.09]
+[[devices.motion]]
+kind = "oscillate"
+axis = [1.0, 0.0, 0.0]
+amplitude_m = 0.02
+frequency_hz = 3.0
+[[couplings]]
+device = "hand"
+body = "paddle"
+grasp_position_m = [0.02, 0.02, 0.06]
+[time]
+cfl = 0.2
+frame_rate_hz = 100.0
+"""
+
+
+def write_scene(folder: pathlib.Path, text: str = SCENE) -> pathlib.Path:
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "box.obj").write_text(BOX_OBJ)
+    scene = folder / "scene.toml"
+    scene.write_text(text)
+    return scene
+
+
+def run(binary, scene, out, *extra):
+    return subprocess.run([str(binary("haptic-sim")), "--scene", str(scene), "--out", str(out), "--backend", "cpu",
+                           "--threads", "2", *extra], capture_output=True, text=True, timeout=120)
+
+
+def test_batch_run_writes_every_output(binary, tmp_path):
+    scene = write_scene(tmp_path / "scene")
+    out = tmp_path / "out"
+    result = run(binary, scene, out, "--export-every", "0.05")
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((out / "stats.json").read_text())
+    assert stats["complete"] is True
+    assert stats["backend"] == "cpu"
+    assert stats["particles"]["fluid"] > 500 and stats["particles"]["body"] > 20
+    assert abs(stats["simulated_time_s"] - 0.1) < 1e-9
+    assert stats["steps"] >= 10 and stats["steps_per_s"] > 0 and stats["real_time_factor"] > 0
+    assert set(stats["phase_ms_per_step"]) == {"neighbour_search", "density", "forces", "bodies", "integration"}
+
+    frames = sorted((out / "particles").glob("frame_*.vtk"))
+    assert [f.name for f in frames] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
+    frame = read_vtk(frames[-1])
+    n = stats["particles"]["total"]
+    assert frame["points"].shape == (n, 3)
+    for field in ("velocity", "density", "pressure", "kind", "body", "id"):
+        assert field in frame, field
+    assert set(frame["kind"].tolist()) == {0, 1, 2}  # fluid, wall, body
+    assert (frame["body"][frame["kind"] == 2] == 0).all()
+
+    with open(out / "bodies.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0].keys()) == "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz".split(",")
+    assert len(rows) == 10 and rows[-1]["body"] == "paddle"
+    with open(out / "couplings.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0].keys()) == "t,device,body,fx,fy,fz,tx,ty,tz".split(",")
+    assert rows[-1]["device"] == "hand" and rows[-1]["body"] == "paddle"
+    assert not list(out.rglob("*.part"))
+
+
+def test_same_run_twice_gives_identical_outputs(binary, tmp_path):
+    # Determinism for a given thread count: every particle and body value, bit for bit.
+    scene = write_scene(tmp_path / "scene")
+    outputs = []
+    for name in ("a", "b"):
+        result = run(binary, scene, tmp_path / name, "--export-every", "0.1")
+        assert result.returncode == 0, result.stderr
+        outputs.append(tmp_path / name)
+    for rel in ("bodies.csv", "couplings.csv", "particles/frame_000001.vtk"):
+        assert (outputs[0] / rel).read_bytes() == (outputs[1] / rel).read_bytes(), rel
+
+
+def test_bad_scene_fails_clearly_without_complete_outputs(binary, tmp_path):
+    text = SCENE.replace("position_m = [0.06, 0.03, 0.03]", "position_m = [0.0005, 0.03, 0.03]")
+    scene = write_scene(tmp_path / "scene", text)
+    out = tmp_path / "out"
+    result = run(binary, scene, out)
+    assert result.returncode == 1
+    assert "bodies.paddle: the body overlaps the domain wall x_min" in result.stderr
+    assert not (out / "stats.json").exists()
+    assert not (out / "bodies.csv").exists()
+
+
+def test_missing_arguments_print_usage(binary):
+    result = subprocess.run([str(binary("haptic-sim"))], capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "--scene and --out are required" in result.stderr
