@@ -10,6 +10,7 @@
 
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/sim/batch_run.hpp"
+#include "live_main.hpp"  // sim_gpu/live: haptic-sim --live
 
 namespace {
 
@@ -37,6 +38,7 @@ bool parse_number(const std::string& flag, const char* text, double& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (hapfluid::sim::wants_live(argc, argv)) return hapfluid::sim::live_main(argc, argv);
   hapfluid::sim::BatchOptions o;
   o.threads = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   for (int i = 1; i < argc; ++i) {
