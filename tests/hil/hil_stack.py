@@ -1,0 +1,140 @@
+"""Hardware-in-the-loop harness: the real binaries (haptic-fake-device, haptic-rt, haptic-sim --live,
+haptic-render, haptic-sim-standin) as separate processes over the loopback transport.
+
+Every stack gets a private copy of a shipped rig (own loopback socket paths, own shm prefix) so
+tests never collide with each other, with `make run` or with installed services. Processes are
+tracked by the Popen objects the harness started and stopped by pid, never by name."""
+import csv
+import os
+import pathlib
+import re
+import signal
+import subprocess
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+SCENES = ROOT / "config" / "scenes"
+RIGS = ROOT / "config" / "rigs"
+
+# safety::Fault bits (rt_core/include/hapfluid/safety/flags.hpp)
+FAULT_LINK_TIMEOUT = 1 << 1
+FAULT_LINK_INVALID = 1 << 2
+FAULT_DEVICE_REPORTED = 1 << 3
+FAULT_SIM_STALE = 1 << 4
+LINK_FAULTS = FAULT_LINK_TIMEOUT | FAULT_LINK_INVALID | FAULT_DEVICE_REPORTED
+
+
+def _fifo_prefix() -> list[str]:
+    try:
+        ok = subprocess.run(["chrt", "-f", "70", "true"], capture_output=True).returncode == 0
+    except FileNotFoundError:
+        ok = False
+    return ["chrt", "-f", "70"] if ok else []
+
+
+FIFO = _fifo_prefix()
+
+
+def read_csv(path) -> list[dict]:
+    with open(path, newline="") as f:
+        return [{k: (float(v) if k not in ("device", "body") else v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def norm3(row, prefix) -> float:
+    return (row[prefix + "x"] ** 2 + row[prefix + "y"] ** 2 + row[prefix + "z"] ** 2) ** 0.5
+
+
+class Stack:
+    def __init__(self, binary, tmp_path: pathlib.Path, rig="fake_single.toml", tag="hil"):
+        self.binary = binary
+        self.dir = tmp_path
+        self.tag = f"{tag}-{os.getpid()}-{time.monotonic_ns() % 10_000_000}"
+        self.prefix = f"hapfluid-hil-{self.tag}"
+        self.sockets = []
+
+        def private(match):
+            self.sockets.append(f"/tmp/hapfluid-{self.tag}-{len(self.sockets)}.sock")
+            return f'address = "{self.sockets[-1]}"'
+        text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', private, (RIGS / rig).read_text())
+        self.rig = tmp_path / "rig.toml"
+        self.rig.write_text(text)
+        self.procs = {}
+
+    # ---- processes -------------------------------------------------------------------------
+    def _start(self, name, args, stdout=None):
+        log = open(self.dir / f"{name}.log", "a")
+        p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True)
+        self.procs[name] = p
+        return p
+
+    def fake_device(self, device="hand", motion="hold", name=None, extra=()):
+        name = name or f"fake-{device}"
+        # A real device's MCU never misses its 1 ms tick; where allowed, the emulator gets a
+        # real-time priority (below haptic-rt's 80) so a loaded CI machine does not fake link faults.
+        p = self._start(name, [*FIFO, self.binary("haptic-fake-device"), "--rig", self.rig, "--device", device, "--motion",
+                               motion, "--log", self.dir / f"{name}.csv", "--summary", self.dir / f"{name}.json",
+                               *extra], stdout=subprocess.PIPE)
+        line = p.stdout.readline()
+        assert "ready" in line, f"{name} did not start: {line!r} {self.log(name)}"
+        return p
+
+    def rt(self, name="rt", extra=()):
+        return self._start(name, [self.binary("haptic-rt"), "--rig", self.rig, "--shm-prefix", self.prefix,
+                                  "--trace", self.dir / f"{name}-trace.csv", "--flight-dir", self.dir / "flight", *extra])
+
+    def sim(self, scene, name="sim", extra=()):
+        p = self._start(name, [self.binary("haptic-sim"), "--live", "--scene", SCENES / f"{scene}.toml",
+                               "--shm-prefix", self.prefix, "--out", self.dir / name, "--threads", "1",
+                               "--status-every", "1", *extra])
+        self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.sim_samples") or p.poll() is not None, 30)
+        assert p.poll() is None, f"haptic-sim stopped: {self.log(name)}"
+        return p
+
+    def standin(self, *args, name="standin"):
+        return self._start(name, [self.binary("haptic-sim-standin"), "--shm-prefix", self.prefix, *args])
+
+    def render(self, scene, name="render"):
+        return self._start(name, [self.binary("haptic-render"), "--live", "--scene", SCENES / f"{scene}.toml",
+                                  "--shm-prefix", self.prefix, "--headless", "--out", self.dir / "frames",
+                                  "--no-mp4", "--width", "320", "--height", "240"])
+
+    def stop(self, name, sig=signal.SIGINT, timeout=15):
+        p = self.procs[name]
+        if p.poll() is None:
+            p.send_signal(sig)
+        try:
+            return p.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            p.wait()
+            raise AssertionError(f"{name} ignored {sig!r} for {timeout} s: {self.log(name)}")
+
+    def kill(self, name):
+        return self.stop(name, signal.SIGKILL)
+
+    def close(self):
+        """Stops whatever is still running (test failure paths)."""
+        for name, p in self.procs.items():
+            if p.poll() is None:
+                p.kill()
+                p.wait()
+            if p.stdout:
+                p.stdout.close()
+
+    # ---- observations -----------------------------------------------------------------------
+    def log(self, name) -> str:
+        path = self.dir / f"{name}.log"
+        return path.read_text() if path.exists() else ""
+
+    def leftovers(self) -> list[str]:
+        shm = [n for n in os.listdir("/dev/shm") if n.startswith(self.prefix + ".")]
+        return shm + [s for s in self.sockets if os.path.exists(s)]
+
+    @staticmethod
+    def wait_for(predicate, timeout_s):
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if predicate():
+                return True
+            time.sleep(0.02)
+        return False
