@@ -59,9 +59,14 @@ std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.
 
 }  // namespace
 
-BatchResult run_batch(const BatchOptions& o, std::ostream& progress) {
+BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
+  BatchOptions o = options;
+  if (o.backend == "auto") {
+    progress << "haptic-sim: --backend auto: no GPU backend in this build, using the cpu backend\n";
+    o.backend = "cpu";
+  }
   if (o.backend != "cpu")
-    throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only");
+    throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only (use cpu or auto)");
   if (o.threads < 1 || o.threads > 256) throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1..256");
   const config::Scene scene = config::load_scene(o.scene);
   const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;
@@ -115,14 +120,9 @@ BatchResult run_batch(const BatchOptions& o, std::ostream& progress) {
     export_frame(0);
     for (int k = 0; k < frames; ++k) {
       const double t0 = k * frame, t1 = std::min(duration, (k + 1) * frame);
-      const double dt_limit = solver.stable_time_step();
-      const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / dt_limit - 1e-9)));
+      const int substeps = solver.advance(t1 - t0, set_devices);
       const double dt = (t1 - t0) / substeps;
       dt_min = std::min(dt_min, dt), dt_max = std::max(dt_max, dt);
-      for (int s = 0; s < substeps; ++s) {
-        set_devices(t0 + s * dt);
-        solver.step(dt);
-      }
       solver.check_finite();
       r.steps = solver.steps();
       r.simulated_time_s = t1;

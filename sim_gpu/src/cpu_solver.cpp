@@ -14,14 +14,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// sum over a run of grid candidates of w_j W-shape (the poly6 shape, zero beyond h).
 inline float poly6_run_weighted(const float* x, const float* y, const float* z, const float* w, std::uint32_t b,
-                                std::uint32_t e, float xi, float yi, float zi, float h2) {
+                                std::uint32_t e, float xi, float yi, float zi, const KernelConstants& k) {
   float sum = 0;
   for (std::uint32_t j = b; j < e; ++j) {
     const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-    float d = h2 - (dx * dx + dy * dy + dz * dz);
-    d = d > 0 ? d : 0;
-    sum += w[j] * d * d * d;
+    sum += w[j] * poly6_shape(k, dx * dx + dy * dy + dz * dz);
   }
   return sum;
 }
@@ -34,7 +33,6 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
     devices_[d] = device_state_from(config::evaluate_motion(m_.devices[d].motion, 0.0));
   couplings_of_body_.resize(m_.bodies.size());
   for (auto& c : m_.couplings) couplings_of_body_[c.body].push_back(&c);
-  worker_max_speed_.assign(threads, 0);
   worker_max_accel_.assign(threads, 0);
   worker_clamped_.assign(threads, 0);
   neighbour_lists_.resize(threads);
@@ -83,12 +81,16 @@ double CpuSolver::stable_time_step() const {
   return std::min(dt, p.max_dt_s);
 }
 
-int CpuSolver::advance(double duration_s) {
+int CpuSolver::advance(double duration_s, const std::function<void(double)>& before_substep) {
   if (duration_s <= 0) return 0;
   const double dt_max = stable_time_step();
   const int substeps = std::max(1, static_cast<int>(std::ceil(duration_s / dt_max - 1e-9)));
   const double dt = duration_s / substeps;
-  for (int i = 0; i < substeps; ++i) step(dt);
+  const double t0 = time_s_;
+  for (int i = 0; i < substeps; ++i) {
+    if (before_substep) before_substep(t0 + i * dt);
+    step(dt);
+  }
   return substeps;
 }
 
@@ -130,21 +132,18 @@ void CpuSolver::compute_body_contact_pressure(std::size_t begin, std::size_t end
   const SimulationParams& p = m_.params;
   const SortedSolids& st = m_.static_solids;
   SortedSolids& bv = body_view_;
-  const float h2 = p.kernel.h2;
   for (std::size_t k = begin; k < end; ++k) {
     const float xi = bv.x[k], yi = bv.y[k], zi = bv.z[k];
     const std::int32_t own = bv.body[k];
     float sum = 0;
     for_each_neighbour_run(p.grid, st.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      sum += poly6_run_weighted(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), b, e, xi, yi, zi, h2);
+      sum += poly6_run_weighted(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), b, e, xi, yi, zi, p.kernel);
     });
     for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
       for (std::uint32_t j = b; j < e; ++j) {
         if (bv.body[j] == own) continue;
         const float dx = xi - bv.x[j], dy = yi - bv.y[j], dz = zi - bv.z[j];
-        float d = h2 - (dx * dx + dy * dy + dz * dz);
-        d = d > 0 ? d : 0;
-        sum += bv.volume[j] * d * d * d;
+        sum += bv.volume[j] * poly6_shape(p.kernel, dx * dx + dy * dy + dz * dz);
       }
     });
     const float pressure = p.stiffness * p.rest_density_kg_m3 * p.kernel.poly6 * sum;
@@ -189,8 +188,8 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
         const float pj = f.pressure[j];
-        const float pterm = -f.volume[j] * (pj + pj) * k.spiky_grad * hr * hr / r;
-        const float vterm = f.volume[j] * 0.5f * (f.viscosity[j] + mui) * k.visc_lap * hr;
+        const float pterm = -f.volume[j] * (pj + pj) * spiky_grad_factor(k, r, hr);
+        const float vterm = f.volume[j] * 0.5f * (f.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
         fx += pterm * dx + vterm * (f.vx[j] - vxi);
         fy += pterm * dy + vterm * (f.vy[j] - vyi);
         fz += pterm * dz + vterm * (f.vz[j] - vzi);
@@ -207,7 +206,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         if (r2 >= k.h2 || r2 <= 0) continue;
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
-        const float pterm = -st.volume[j] * (pb + pb) * k.spiky_grad * hr * hr / r;
+        const float pterm = -st.volume[j] * (pb + pb) * spiky_grad_factor(k, r, hr);
         cx += pterm * dx, cy += pterm * dy, cz += pterm * dz;
       }
     });
@@ -219,7 +218,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         if (r2 >= k.h2 || r2 <= 0) continue;
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
-        const float pterm = -bv.volume[j] * (pb + bv.pressure[j]) * k.spiky_grad * hr * hr / r;
+        const float pterm = -bv.volume[j] * (pb + bv.pressure[j]) * spiky_grad_factor(k, r, hr);
         cx += pterm * dx, cy += pterm * dy, cz += pterm * dz;
       }
     });
@@ -293,8 +292,12 @@ void CpuSolver::step(double dt) {
   const float dtf = static_cast<float>(dt);
   auto t0 = Clock::now();
   sort_fluid();
-  if (m_.body_particles.size() > 0) build_body_view();
-  else body_view_.resize(0), body_view_.cell_start.clear();
+  if (m_.body_particles.size() > 0) {
+    build_body_view();
+  } else {
+    body_view_.resize(0);
+    body_view_.cell_start.clear();
+  }
   times_.neighbour_search_s += seconds_since(t0);
 
   t0 = Clock::now();

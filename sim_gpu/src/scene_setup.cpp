@@ -19,6 +19,8 @@ std::string fmt(double v) {
   return s.str();
 }
 
+constexpr double kBoundaryInsetSpacings = 0.65;
+
 [[noreturn]] void fail(const config::Scene& scene, const std::string& what) {
   throw std::runtime_error(scene.file.string() + ": " + what);
 }
@@ -183,7 +185,11 @@ SimulationModel build_model(const config::Scene& scene) {
       fail(scene, "bodies." + cb.name + ": sampling spacing " + fmt(spacing) + " m is larger than the support radius h = " +
                       fmt(h) + " m: fluid would leak between the body's particles; use sampling_spacing_m <= " + fmt(h));
     const MassProperties mp = mass_properties(mesh, cb.scale);
-    const std::vector<Vec3> samples = sample_surface(mesh, cb.scale, spacing, 0.5 * spacing);
+    // Fluid particles rest about 1.15 fluid spacings from a single layer of boundary particles
+    // (where the layer's Akinci contribution fills their density up to rho0), so the fluid's
+    // own surface, half a spacing nearer, lies 0.65 spacings from the layer: sampling that far
+    // inside the mesh puts it on the mesh surface.
+    const std::vector<Vec3> samples = sample_surface(mesh, cb.scale, spacing, kBoundaryInsetSpacings * s);
     const config::Aabb bounds = config::transformed_bounds(mesh, cb.scale, config::Pose{});
     const double extent = std::max({bounds.max_m.x - bounds.min_m.x, bounds.max_m.y - bounds.min_m.y,
                                     bounds.max_m.z - bounds.min_m.z});

@@ -25,16 +25,15 @@ inline std::uint32_t collect_run(const float* x, const float* y, const float* z,
   return n;
 }
 
-// sum over listed neighbours of w_j d^3, d = h^2 - r^2 (poly6 shape; all listed are within h).
+// sum over listed neighbours of w_j (h^2 - r^2)^3 (the poly6 shape).
 inline float poly6_sum(const float* x, const float* y, const float* z, const float* w, const std::uint32_t* list,
-                       std::uint32_t n, float xi, float yi, float zi, float h2) {
+                       std::uint32_t n, float xi, float yi, float zi, const KernelConstants& k) {
   float sum = 0;
 #pragma omp simd reduction(+ : sum)
-  for (std::uint32_t k = 0; k < n; ++k) {
-    const std::uint32_t j = list[k];
+  for (std::uint32_t q = 0; q < n; ++q) {
+    const std::uint32_t j = list[q];
     const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-    const float d = h2 - (dx * dx + dy * dy + dz * dz);
-    sum += (w ? w[j] : 1.0f) * d * d * d;
+    sum += (w ? w[j] : 1.0f) * poly6_shape(k, dx * dx + dy * dy + dz * dz);
   }
   return sum;
 }
@@ -57,8 +56,8 @@ inline void fluid_terms(const FluidParticles& f, const std::uint32_t* list, std:
     const bool in = r2 > 0;  // a particle is in its own list (r = 0): no force on itself
     const float r = std::sqrt(in ? r2 : k.h2);
     const float hr = in ? k.h - r : 0.0f;
-    const float pterm = -vol[j] * (pi + pr[j]) * k.spiky_grad * hr * hr / r;
-    const float vterm = vol[j] * 0.5f * (mui + mu[j]) * k.visc_lap * hr;
+    const float pterm = -vol[j] * (pi + pr[j]) * spiky_grad_factor(k, r, hr);
+    const float vterm = vol[j] * 0.5f * (mui + mu[j]) * viscosity_laplacian_of(k, hr);
     sx += pterm * dx + vterm * (vx[j] - vxi);
     sy += pterm * dy + vterm * (vy[j] - vyi);
     sz += pterm * dz + vterm * (vz[j] - vzi);
@@ -81,8 +80,8 @@ inline void solid_terms(const SortedSolids& s, const std::uint32_t* list, std::u
     const bool in = r2 > 0;
     const float r = std::sqrt(in ? r2 : k.h2);
     const float hr = in ? k.h - r : 0.0f;
-    const float pterm = -vol[j] * (pi + pi) * k.spiky_grad * hr * hr / r;
-    const float vterm = vol[j] * 0.5f * (mui + mu[j]) * k.visc_lap * hr;
+    const float pterm = -vol[j] * (pi + pi) * spiky_grad_factor(k, r, hr);
+    const float vterm = vol[j] * 0.5f * (mui + mu[j]) * viscosity_laplacian_of(k, hr);
     const float dvx = vx[j] - vxi, dvy = vy[j] - vyi, dvz = vz[j] - vzi;
     const float along = (1.0f - ns[j]) * (dvx * dx + dvy * dy + dvz * dz) / (in ? r2 : k.h2);
     sx += pterm * dx + vterm * (ns[j] * dvx + along * dx);
@@ -126,9 +125,10 @@ void density_pass(const SimulationParams& p, FluidParticles& f, const std::uint3
     range.statics = static_cast<std::uint16_t>(std::min<std::uint32_t>(ns, 65535));
     range.bodies = static_cast<std::uint16_t>(std::min<std::uint32_t>(nb, 65535));
     const std::uint32_t* list = lists.indices.data() + range.offset;
-    const float fluid_sum = poly6_sum(f.x.data(), f.y.data(), f.z.data(), nullptr, list, nf, xi, yi, zi, h2);
-    float solid_sum = poly6_sum(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), list + nf, ns, xi, yi, zi, h2);
-    solid_sum += poly6_sum(bv.x.data(), bv.y.data(), bv.z.data(), bv.volume.data(), list + nf + ns, nb, xi, yi, zi, h2);
+    const KernelConstants& k = p.kernel;
+    const float fluid_sum = poly6_sum(f.x.data(), f.y.data(), f.z.data(), nullptr, list, nf, xi, yi, zi, k);
+    float solid_sum = poly6_sum(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), list + nf, ns, xi, yi, zi, k);
+    solid_sum += poly6_sum(bv.x.data(), bv.y.data(), bv.z.data(), bv.volume.data(), list + nf + ns, nb, xi, yi, zi, k);
     const float rho = p.kernel.poly6 * (mass * fluid_sum + rho0 * solid_sum);
     f.density[i] = rho;
     f.volume[i] = mass / rho;

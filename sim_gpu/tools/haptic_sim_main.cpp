@@ -15,11 +15,11 @@
 namespace {
 
 void usage(std::ostream& out) {
-  out << "usage: haptic-sim --scene FILE --out DIR [--backend cpu] [--duration SECONDS] [--threads N]\n"
+  out << "usage: haptic-sim --scene FILE --out DIR [--backend cpu|auto] [--duration SECONDS] [--threads N]\n"
          "                  [--export-every SECONDS]\n"
          "  --scene FILE          scene file (TOML)\n"
          "  --out DIR             output folder: particles/frame_NNNNNN.vtk, bodies.csv, couplings.csv, stats.json\n"
-         "  --backend cpu         simulation backend (cpu: the multithreaded reference)\n"
+         "  --backend cpu|auto    simulation backend (cpu: the multithreaded reference; auto: best available)\n"
          "  --duration SECONDS    simulated time (default: the scene's duration_s)\n"
          "  --threads N           worker threads (default: all cores)\n"
          "  --export-every SECONDS  particle frame interval (default 0.05; 0: no particle frames)\n";

@@ -121,11 +121,12 @@ cfl = 0.2
 )", {{"ball.obj", test::sphere_mesh(r, 2)}});
   CpuSolver solver(build_model(scene), 2);
   test::run_for(solver, 1.2, 0.02);
-  double centre = 0;
+  double centre = 0, fastest = 0;
   const int samples = 10;
   for (int k = 0; k < samples; ++k) {  // average over 0.2 s of residual bobbing
     test::run_for(solver, 0.02, 0.02);
     centre += solver.model().bodies[0].position.z / samples;
+    fastest = std::max(fastest, std::abs(solver.model().bodies[0].linear_velocity.z));
   }
   // Undisturbed free surface: top layer far from the ball, plus half a spacing.
   const auto& f = solver.model().fluid;
@@ -139,9 +140,9 @@ cfl = 0.2
   std::cout << "floating sphere: centre " << centre << " m, surface " << surface << " m, submerged fraction "
             << fraction << "\n";
   // Particle boundaries blur the surface by a fraction of a spacing: at 3 spacings per radius the
-  // sphere sits a little high (measured 0.35); "about half" within 0.2.
-  EXPECT_NEAR(fraction, 0.5, 0.2);
-  EXPECT_LT(std::abs(solver.model().bodies[0].linear_velocity.z), 0.05);  // m/s: it came to rest
+  // sphere sits a little high (measured 0.45); "about half" within 0.15.
+  EXPECT_NEAR(fraction, 0.5, 0.15);
+  EXPECT_LT(fastest, 0.1);  // m/s: only a residual bob of a few mm is left
   std::filesystem::remove_all(dir);
 }
 
@@ -180,8 +181,10 @@ cfl = 0.2
 
 namespace {
 
-// Peak fluid torque about z (most negative) on a cup full of fluid spun up about z by a device:
-// the start phase of fig. 10, where the container drags the fluid at rest into rotation.
+// Mean fluid torque about z on a cup full of fluid while a device spins it up about z (the
+// 0.1 s ramp from 0.05 s): the start phase of fig. 10, where the container drags the fluid at
+// rest into rotation. Its time integral is the angular momentum handed to the fluid. The device
+// pose is updated every substep, as the batch runner does.
 double spin_up_torque(double container_viscosity) {
   const auto dir = test::temp_dir("spin" + std::to_string(static_cast<int>(container_viscosity)));
   char body[2048];
@@ -224,13 +227,13 @@ cfl = 0.2
 )" + body, {{"cup.obj", test::cup_mesh(0.05, 0.08, 0.01, 48)}});
   CpuSolver solver(build_model(scene), 2);
   double torque = 0;
-  int n = 0;
   const double frame = 0.01;
-  for (int k = 0; k < 30; ++k) {
+  for (int k = 0; k < 15; ++k) {
     const double t = solver.time_s();
-    solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, t)));
-    solver.advance(frame);
-    if (t >= 0.05) torque = std::min(torque, solver.model().bodies[0].fluid_torque.z), ++n;
+    solver.advance(frame, [&](double now) {
+      solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, now)));
+    });
+    if (t >= 0.05 - 1e-9 && t < 0.15 - 1e-9) torque += solver.model().bodies[0].fluid_torque.z / 10;
   }
   std::filesystem::remove_all(dir);
   return torque;
@@ -240,10 +243,10 @@ cfl = 0.2
 
 TEST(Coupling, SpunContainerFeelsTorqueOpposingSpinGrowingWithItsViscosity) {
   const double low = spin_up_torque(2.0), high = spin_up_torque(40.0);
-  std::cout << "spin-up peak fluid torque about z: container 2 Pa s " << low << " N m, 40 Pa s " << high << " N m\n";
+  std::cout << "spin-up mean fluid torque about z: container 2 Pa s " << low << " N m, 40 Pa s " << high << " N m\n";
   EXPECT_LT(low, 0.0);   // against the spin (+z)
   EXPECT_LT(high, 0.0);
-  EXPECT_LT(high, low);  // stronger (more negative) with the more viscous container
+  EXPECT_LT(high, 1.5 * low);  // much stronger (more negative) with the more viscous container (measured 2.3x)
 }
 
 TEST(Coupling, StirringToolFeelsForceAgainstItsMotion) {
@@ -285,9 +288,9 @@ cfl = 0.2
   CpuSolver solver(build_model(scene), 2);
   double power = 0, speed2 = 0;
   for (int k = 0; k < 50; ++k) {
-    const double t = solver.time_s();
-    solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, t)));
-    solver.advance(0.01);
+    solver.advance(0.01, [&](double now) {
+      solver.set_device_state(0, device_state_from(config::evaluate_motion(solver.model().devices[0].motion, now)));
+    });
     const RigidBody& b = solver.model().bodies[0];
     power += b.fluid_force.x * b.linear_velocity.x;
     speed2 += b.linear_velocity.x * b.linear_velocity.x;
@@ -337,5 +340,44 @@ grasp_position_m = [0.29, 0.02, 0.02]
     EXPECT_NEAR(c.device_force.z, -0.5 * weight, 0.03 * weight);
     EXPECT_NEAR(c.device_force.x, 0.0, 0.03 * weight);
   }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(RigidBody, BodiesCollideWithEachOtherAndTheFloorWithoutPassingThrough) {
+  // Body<->body and body<->wall contacts go through the same particle pressure forces (contact
+  // pressure from the other solid's particles): two balls dropped in vacuum onto the floor,
+  // one above the other, never interpenetrate by more than a particle spacing.
+  const double r = 0.03, s = 0.01;
+  const auto dir = test::temp_dir("stack");
+  const auto scene = test::write_scene(dir, "name = \"stack\"\n" + domain(0, 0, 0, 0.2, 0.2, 0.4) + R"(
+[fluid]
+particle_spacing_m = 0.01
+speed_of_sound_m_s = 10.0
+[[bodies]]
+name = "lower"
+mesh = "ball.obj"
+position_m = [0.1, 0.1, 0.1]
+density_kg_m3 = 800.0
+[[bodies]]
+name = "upper"
+mesh = "ball.obj"
+position_m = [0.105, 0.1, 0.2]
+density_kg_m3 = 800.0
+[time]
+max_dt_s = 0.0005
+)", {{"ball.obj", test::sphere_mesh(r, 2)}});
+  CpuSolver solver(build_model(scene), 2);
+  double closest = 1e9, lowest = 1e9;
+  for (int k = 0; k < 60; ++k) {
+    solver.advance(0.01);
+    const auto& b = solver.model().bodies;
+    closest = std::min(closest, norm(b[1].position - b[0].position));
+    lowest = std::min({lowest, b[0].position.z - r, b[1].position.z - r});
+  }
+  std::cout << "stack: closest centre distance " << closest << " m (2r = " << 2 * r << "), lowest bottom " << lowest
+            << " m\n";
+  EXPECT_LT(lowest, 0.01);  // a ball did reach the floor (m); contacts are elastic, they bounce
+  EXPECT_GT(closest, 2 * r - s);
+  EXPECT_GT(lowest, -0.5 * s);
   std::filesystem::remove_all(dir);
 }

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -19,8 +20,10 @@ namespace hapfluid::sim {
 // Wall-clock seconds spent in each phase, summed over all steps.
 struct PhaseTimes {
   double neighbour_search_s = 0;  // counting sort of fluid and body particles by cell
-  double density_s = 0;           // eq. 2 and eq. 7 (fluid), contact pressure (bodies)
-  double forces_s = 0;            // eqs. 5, 6, 9 on fluid and body particles
+  // eq. 2 and eq. 7 (fluid), contact pressure (bodies); includes the distance checks over the
+  // 27 cells that build the neighbour lists (fused with the density sum).
+  double density_s = 0;
+  double forces_s = 0;            // eqs. 5, 6, 9 on fluid (over the lists) and body particles
   double bodies_s = 0;            // eqs. 10-14, couplings (Algorithm 2)
   double integration_s = 0;       // fluid leap-frog
 };
@@ -48,8 +51,9 @@ class CpuSolver {
   // One step of dt seconds.
   void step(double dt);
   // Advances by `duration_s` in equal substeps no longer than stable_time_step(); returns the
-  // number of substeps. Device states must be set by the caller (they are held constant).
-  int advance(double duration_s);
+  // number of substeps. before_substep(t), when given, runs before each substep with the
+  // substep's start time (the caller sets device states there); otherwise they are held.
+  int advance(double duration_s, const std::function<void(double)>& before_substep = {});
 
   // Throws std::runtime_error naming the first particle or body whose state is not finite.
   void check_finite() const;
@@ -70,7 +74,7 @@ class CpuSolver {
   SortedSolids body_view_;  // dynamic body particles sorted by cell (rebuilt each step)
   std::vector<DeviceState> devices_;
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
-  std::vector<float> worker_max_speed_, worker_max_accel_;
+  std::vector<float> worker_max_accel_;
   std::vector<std::uint64_t> worker_clamped_;
   std::vector<detail::NeighbourLists> neighbour_lists_;  // one per worker
   std::vector<detail::NeighbourRange> neighbour_ranges_;  // one per fluid particle

@@ -32,25 +32,30 @@ inline KernelConstants make_kernel_constants(double support_radius_m) {
   return k;
 }
 
-// poly6: W(r) = 315 / (64 pi h^9) (h^2 - r^2)^3, as a function of r^2 (no square root needed).
-inline float poly6(const KernelConstants& k, float r2) {
-  if (r2 >= k.h2) return 0.0f;
-  const float d = k.h2 - r2;
-  return k.poly6 * d * d * d;
+// Branch-free forms the solver's vectorised pair loops use. Outside the support they are fed
+// hr = max(h - r, 0) = 0 (or r^2 >= h^2), which makes them zero.
+// poly6 shape (h^2 - r^2)^3, clamped at 0; W = k.poly6 * shape (sums are scaled once).
+inline float poly6_shape(const KernelConstants& k, float r2) {
+  const float d = k.h2 - r2 > 0.0f ? k.h2 - r2 : 0.0f;
+  return d * d * d;
 }
+// Spiky gradient: grad W(x) = spiky_grad_factor * x = -45 / (pi h^6) (h - r)^2 x / r, r > 0.
+inline float spiky_grad_factor(const KernelConstants& k, float r, float hr) { return k.spiky_grad * hr * hr / r; }
+// Viscosity kernel Laplacian 45 / (pi h^6) (h - r).
+inline float viscosity_laplacian_of(const KernelConstants& k, float hr) { return k.visc_lap * hr; }
 
-// Spiky gradient magnitude factor: grad W(x) = spiky_grad_over_r(r) * x, with
-// grad W = -45 / (pi h^6) (h - r)^2 x / r. Zero at r = 0 (the direction is undefined there).
+// poly6: W(r) = 315 / (64 pi h^9) (h^2 - r^2)^3, as a function of r^2 (no square root needed).
+inline float poly6(const KernelConstants& k, float r2) { return k.poly6 * poly6_shape(k, r2); }
+
+// Spiky gradient over r, zero outside the support and at r = 0 (no direction there).
 inline float spiky_grad_over_r(const KernelConstants& k, float r) {
   if (r >= k.h || r <= 0.0f) return 0.0f;
-  const float d = k.h - r;
-  return k.spiky_grad * d * d / r;
+  return spiky_grad_factor(k, r, k.h - r);
 }
 
-// Viscosity kernel Laplacian: 45 / (pi h^6) (h - r).
+// Viscosity kernel Laplacian, zero outside the support.
 inline float viscosity_laplacian(const KernelConstants& k, float r) {
-  if (r >= k.h) return 0.0f;
-  return k.visc_lap * (k.h - r);
+  return r >= k.h ? 0.0f : viscosity_laplacian_of(k, k.h - r);
 }
 
 // The kernels in double with explicit h, for tests (normalisation, finite differences).

@@ -31,10 +31,11 @@ inline constexpr double kSampleRadiusFactor = 0.8;
 // Points on the surface with no two closer than 0.8 spacing_m and no surface point farther than
 // that from a sample (greedy Poisson-disk thinning of a fine barycentric lattice; the
 // candidate order is fixed, so the result is deterministic). Mesh frame, scaled.
-// inset_m moves the samples inward along the surface normal: boundary particles half a spacing
-// inside the surface put the fluid's effective boundary on the mesh surface itself (fluid
-// particles keep about half a spacing from boundary particles, as they do from each other),
-// so a body displaces its true volume (Archimedes) and a container holds its true capacity.
+// inset_m moves the samples inward along the surface normal (vertex normals for vertices, face
+// normals elsewhere): boundary particles placed inside the surface put the fluid's effective
+// boundary on the mesh surface itself, so a body displaces its true volume (Archimedes) and a
+// container holds its true capacity. Walls thinner than twice the inset end up as two sheets
+// that have crossed, still about the mid-surface.
 std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale, double spacing_m, double inset_m = 0);
 
 // Inside test for a closed mesh (parity of crossings of a ray), scaled mesh frame.
