@@ -194,7 +194,7 @@ def run_live(args, scene_path, out, bin_dir):
     rig_path = private_rig(rig_src, out, tag)
     rig = load_toml(rig_path)
     prefix = args.shm_prefix or f"hapfluid-run-{tag}"
-    duration = args.duration if args.duration else 10.0
+    duration = args.duration if args.duration else float(scene.get("duration_s", 10.0))
     (out / "logs").mkdir(exist_ok=True)
     (out / "frames").mkdir(exist_ok=True)
 
@@ -322,7 +322,7 @@ def main():
     run = sub.add_parser("run", help="run a scene")
     run.add_argument("--scene", default="spoon_stirring")
     run.add_argument("--rig", default=None, help="rig file (default: fake_single, fake_dual for two-hand scenes)")
-    run.add_argument("--duration", type=float, default=None, help="seconds (default 10)")
+    run.add_argument("--duration", type=float, default=None, help="seconds (default: the scene's duration_s)")
     run.add_argument("--build", default="build")
     run.add_argument("--out", default=None, help="output folder (default: out/<scene>-<timestamp>)")
     run.add_argument("--windowed", action="store_true", help="render in a window instead of PNG frames")
