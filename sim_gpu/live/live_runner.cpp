@@ -216,7 +216,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
     if (!o.out.empty()) {
       std::filesystem::create_directories(o.out);
       std::filesystem::remove(o.out / "stats.json");  // never mistaken for this run's until it ends
-      couplings_csv.emplace(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick");
+      couplings_csv.emplace(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick,publish_ns");
       bodies_csv.emplace(o.out / "bodies.csv", "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz");
     }
   } catch (const std::exception& e) {
@@ -411,7 +411,8 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       ++c.samples;
 
       if (couplings_csv) {
-        const std::string tail = "," + num(double(s.publish_ns - start_ns) * 1e-9) + "," + std::to_string(s.device_tick);
+        const std::string tail = "," + num(double(s.publish_ns - start_ns) * 1e-9) + "," + std::to_string(s.device_tick) +
+                                 "," + std::to_string(s.publish_ns);
         for (const VirtualCoupling& vc : m.couplings)
           couplings_csv->row(num(solver->time_s()) + "," + m.devices[vc.device].name + "," + m.bodies[vc.body].name + "," +
                              vec(vc.device_force) + "," + vec(vc.device_torque) + tail);
