@@ -159,6 +159,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
     log << "haptic-sim: --backend " << o.backend << ": the live mode of this build has the cpu backend only\n";
     return 2;
   }
+  if (o.backend == "auto") log << "haptic-sim: --backend auto: the live mode runs the cpu backend (no Vulkan live path yet)\n";
   if (o.threads < 1 || o.threads > 256) {
     log << "haptic-sim: --threads " << o.threads << ": must be 1..256\n";
     return 2;

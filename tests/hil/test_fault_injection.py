@@ -5,6 +5,7 @@ max_force_n 8, max_torque_nm 0.4, sim_stale_ms 50, sim_ramp_down_ms 100, link_ti
 device_watchdog_ms 20."""
 import json
 import os
+import signal
 import time
 
 import numpy as np
@@ -170,3 +171,30 @@ def test_parts_restart_in_any_order(stack):
     assert np.mean([r["d0_fresh"] for r in tail]) > 0.9
     assert np.percentile([r["sim_age_ns"] for r in tail], 99) < 50e6
     assert stack.leftovers() == []
+
+
+def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
+    # SIGSTOP freezes the real simulator for 0.6 s (a stall, not a crash): the loop ramps the
+    # wrench to zero, and after SIGCONT the sim drops its backlog instead of racing through it —
+    # saying so (a fluid running late is never silent) — and the wrench fades back in.
+    stack.sim("spoon_stirring")
+    stack.fake_device("hand", motion=STIR)
+    stack.rt()
+    time.sleep(2.0)
+    stopped = time.monotonic()
+    stack.procs["sim"].send_signal(signal.SIGSTOP)
+    time.sleep(0.6)
+    stack.procs["sim"].send_signal(signal.SIGCONT)
+    time.sleep(1.5)
+    codes = {n: stack.stop(n) for n in ("rt", "sim", "fake-hand")}
+    assert codes == {"rt": 0, "sim": 0, "fake-hand": 0}
+    trace = read_csv(stack.dir / "rt-trace.csv")
+    t = trace_time_s(trace)
+    s = wall_to_trace_s(trace, stopped)
+    frozen = [r for r, ti in zip(trace, t) if s + STALE_PLUS_RAMP_S + 0.02 < ti < s + 0.55]
+    assert frozen and all(force(r) < 1e-9 and int(r["d0_faults"]) & FAULT_SIM_STALE for r in frozen)
+    resumed = [r for r, ti in zip(trace, t) if ti > s + 1.2]
+    assert max(force(r) for r in resumed) > 0.3 and not any(int(r["d0_faults"]) & FAULT_SIM_STALE for r in resumed[-300:])
+    assert "cannot keep up with the wall clock" in stack.log("sim")
+    stats = json.loads((stack.dir / "sim" / "stats.json").read_text())
+    assert stats["kept_up_with_wall_clock"] is False and stats["dropped_backlog_s"] >= 0.5
