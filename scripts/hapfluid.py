@@ -234,7 +234,9 @@ def run_live(args, scene_path, out, bin_dir):
                                   "--flight-dir", out / "flight"])
         stack.start("haptic-trace", [bin_dir / "haptic-trace", "--out", out / "trace.csv", "--shm-prefix", prefix,
                                      "--wait", "10"])
-        if not args.no_render:
+        if not args.no_render and not (bin_dir / "haptic-render").exists():
+            print("hapfluid: haptic-render is not built: running without the renderer", file=sys.stderr)
+        elif not args.no_render:
             render = [bin_dir / "haptic-render", "--live", "--scene", scene_path, "--shm-prefix", prefix]
             render += ["--width", "640", "--height", "480"]
             render += [] if args.windowed else ["--headless", "--out", out / "frames", "--no-mp4"]
@@ -310,7 +312,7 @@ def print_summary(summary):
     print(f"  rendered frames: {summary.get('rendered_frames', 0)}")
     w = summary.get("wake_latency_us")
     if isinstance(w, dict) and "p99" in w:
-        print(f"  1 kHz loop wake latency: p50 {w.get('p50')} us, p99 {w['p99']} us, max {w.get('max')} us")
+        print(f"  1 kHz loop wake latency: p50 {w.get('p50', 0):.1f} us, p99 {w['p99']:.1f} us, max {w.get('max', 0):.1f} us")
     for n, f in summary.get("max_force_on_hand_n", {}).items():
         print(f"  max force on the hand '{n}': {f} N")
     print(f"  outputs: {summary['out']}")

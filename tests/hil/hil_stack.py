@@ -24,6 +24,13 @@ FAULT_SIM_STALE = 1 << 4
 LINK_FAULTS = FAULT_LINK_TIMEOUT | FAULT_LINK_INVALID | FAULT_DEVICE_REPORTED
 
 
+def _try_nice(increment):
+    try:
+        os.nice(increment)
+    except PermissionError:
+        pass
+
+
 def _fifo_prefix() -> list[str]:
     try:
         ok = subprocess.run(["chrt", "-f", "70", "true"], capture_output=True).returncode == 0
@@ -61,9 +68,10 @@ class Stack:
         self.procs = {}
 
     # ---- processes -------------------------------------------------------------------------
-    def _start(self, name, args, stdout=None):
+    def _start(self, name, args, stdout=None, nice=0):
         log = open(self.dir / f"{name}.log", "a")
-        p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True)
+        p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True,
+                             preexec_fn=(lambda: _try_nice(nice)) if nice else None)
         self.procs[name] = p
         return p
 
@@ -85,7 +93,7 @@ class Stack:
     def sim(self, scene, name="sim", extra=()):
         p = self._start(name, [self.binary("haptic-sim"), "--live", "--scene", SCENES / f"{scene}.toml",
                                "--shm-prefix", self.prefix, "--out", self.dir / name, "--threads", "1",
-                               "--status-every", "1", *extra])
+                               "--status-every", "1", *extra], nice=-5)  # as its systemd unit (Nice=-5)
         self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.sim_samples") or p.poll() is not None, 30)
         assert p.poll() is None, f"haptic-sim stopped: {self.log(name)}"
         return p
