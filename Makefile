@@ -3,6 +3,7 @@
 #   make test     ... and run every test (ctest + pytest), with their summaries
 #   make run      ... and run the main job (SCENE=<name> for another scene)
 #   make bench    ... and run every benchmark, JSON under out/bench/
+#   make hil      ... and run the QEMU hardware-in-the-loop suite (KERNEL=rt: PREEMPT_RT kernel)
 #   make install  install binaries, config and systemd units (PREFIX=/usr/local)
 #   make clean    remove build/ and out/
 SHELL := /bin/bash
@@ -14,6 +15,7 @@ DURATION ?=
 VENV := .venv
 PY := $(VENV)/bin/python
 JOBS ?= $(shell nproc)
+KERNEL ?= default
 
 .PHONY: all deps build test test-cpp test-py run bench install clean hil
 
@@ -39,6 +41,9 @@ bench: build
 
 install: build
 	@cmake --install $(BUILD) --prefix $(PREFIX)
+
+hil: build
+	@$(PY) tests/hil-kernel/hil.py --build $(BUILD) --kernel $(KERNEL)
 
 clean:
 	rm -rf $(BUILD) out

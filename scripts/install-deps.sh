@@ -20,7 +20,7 @@ debian_core=(
   rt-tests strace clang libclang-rt-14-dev
   python3-venv
 )
-debian_hil=(qemu-system-x86 busybox-static cpio kmod)
+debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
 python_packages=(pytest numpy matplotlib python-can cantools hypothesis)
 
 want=("${debian_core[@]}")

@@ -102,7 +102,7 @@ TimeStepping read_time(Reader& r) {
   TimeStepping t;
   t.dt_s = r.number("dt_s", 0.0);
   r.check("dt_s", t.dt_s >= 0 && t.dt_s <= 0.01, "must be 0 (CFL) or a step in (0, 0.01] s");
-  t.cfl = r.number("cfl", t.cfl);
+  t.cfl = r.number("cfl", t.cfl);  // default: TimeStepping::cfl
   r.check("cfl", t.cfl > 0 && t.cfl <= 1, "must be in (0, 1]");
   t.max_dt_s = r.number("max_dt_s", t.max_dt_s);
   r.check("max_dt_s", t.max_dt_s > 0 && t.max_dt_s <= 0.01, "must be in (0, 0.01] s");

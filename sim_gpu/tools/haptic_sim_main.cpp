@@ -10,6 +10,9 @@
 
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/sim/batch_run.hpp"
+#ifdef HAPFLUID_WITH_VULKAN
+#include "hapfluid/sim_vulkan/backend.hpp"
+#endif
 #include "live_main.hpp"  // sim_gpu/live: haptic-sim --live
 
 namespace {
@@ -22,7 +25,13 @@ void usage(std::ostream& out) {
          "  --backend cpu|auto    simulation backend (cpu: the multithreaded reference; auto: best available)\n"
          "  --duration SECONDS    simulated time (default: the scene's duration_s)\n"
          "  --threads N           worker threads (default: all cores)\n"
-         "  --export-every SECONDS  particle frame interval (default 0.05; 0: no particle frames)\n";
+         "  --export-every SECONDS  particle frame interval (default 0.05; 0: no particle frames)\n"
+#ifdef HAPFLUID_WITH_VULKAN
+         "  --backend vulkan|auto  Vulkan compute (auto: a GPU, else lavapipe, else cpu with a notice)\n"
+         "  --vk-device auto|gpu|cpu  which Vulkan device (cpu: lavapipe)\n"
+         "  --vk-validation       run with the Khronos validation layer\n"
+#endif
+      ;
 }
 
 bool parse_number(const std::string& flag, const char* text, double& out) {
@@ -40,6 +49,9 @@ bool parse_number(const std::string& flag, const char* text, double& out) {
 int main(int argc, char** argv) {
   if (hapfluid::sim::wants_live(argc, argv)) return hapfluid::sim::live_main(argc, argv);
   hapfluid::sim::BatchOptions o;
+#ifdef HAPFLUID_WITH_VULKAN
+  hapfluid::sim::vulkan::VulkanRunOptions vulkan;
+#endif
   o.threads = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -47,6 +59,12 @@ int main(int argc, char** argv) {
       usage(std::cout);
       return 0;
     }
+#ifdef HAPFLUID_WITH_VULKAN
+    if (a == "--vk-validation") {
+      vulkan.validation = true;
+      continue;
+    }
+#endif
     if (i + 1 >= argc) {
       std::cerr << "haptic-sim: " << a << " needs a value\n";
       usage(std::cerr);
@@ -57,6 +75,15 @@ int main(int argc, char** argv) {
     if (a == "--scene") o.scene = v;
     else if (a == "--out") o.out = v;
     else if (a == "--backend") o.backend = v;
+#ifdef HAPFLUID_WITH_VULKAN
+    else if (a == "--vk-device") {
+      try {
+        vulkan.device = hapfluid::sim::vulkan::parse_device_preference(v);
+      } catch (const std::exception& e) {
+        return std::cerr << "haptic-sim: --vk-device: " << e.what() << "\n", 2;
+      }
+    }
+#endif
     else if (a == "--duration") {
       if (!parse_number(a, v, o.duration_s)) return 2;
       if (o.duration_s <= 0) return std::cerr << "haptic-sim: --duration " << v << ": must be > 0\n", 2;
@@ -79,7 +106,11 @@ int main(int argc, char** argv) {
   }
   o.progress_line = isatty(STDERR_FILENO);
   try {
+#ifdef HAPFLUID_WITH_VULKAN
+    const auto r = hapfluid::sim::vulkan::run_batch_on_backend(o, vulkan, std::cerr);
+#else
     const auto r = hapfluid::sim::run_batch(o, std::cerr);
+#endif
     std::cerr << "haptic-sim: done: " << r.steps << " steps, " << r.simulated_time_s << " s simulated in " << r.wall_time_s
               << " s; outputs in " << o.out.string() << "\n";
     return 0;

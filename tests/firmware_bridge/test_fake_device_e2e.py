@@ -55,8 +55,9 @@ def test_device_watchdog_zeroes_force_after_host_silence(programs, tmp_path, fra
         report = probe(prober, sock, "--framing", framing, "--duration", 1.0, "--force", "3,0,0", "--enable",
                        "--silent-after", 0.5)
         summary = dev.finish()
-    # device side: motors off once 50 ms passed without a command (a late-woken device tick adds a little)
-    assert 50.0 <= summary["watchdog_reaction_ms"] <= 60.0, summary
+    # device side: motors off once 50 ms passed without a command; a device tick woken late on a
+    # loaded (non-real-time) machine adds up to a few ms (the tick-exact rule: test_fake_firmware.cpp)
+    assert 50.0 <= summary["watchdog_reaction_ms"] <= 65.0, summary
     rows = list(csv.DictReader(open(log)))
     last_cmd = max(float(r["t_s"]) for r in rows if r["cmd_received"] == "1")
     after = [r for r in rows if float(r["t_s"]) >= last_cmd + 0.060]

@@ -53,7 +53,7 @@ struct Fluid {
 
 struct TimeStepping {
   double dt_s = 0.0;             // fixed step; 0: from the CFL bound
-  double cfl = 0.4;              // dt = cfl * h / (c + v_max), also bounded by viscosity/force limits
+  double cfl = 0.15;             // dt = cfl * h / (c + v_max), h the support radius; also bounded by viscosity/force limits
   double max_dt_s = 0.002;
   double frame_rate_hz = 60.0;   // published frames (and batch exports); several substeps per frame
 };

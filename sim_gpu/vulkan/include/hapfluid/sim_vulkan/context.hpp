@@ -1,0 +1,144 @@
+// The Vulkan context of the compute backend: the loader (volk, so a machine without libvulkan
+// still runs the CPU backend), the instance with the Khronos validation layer on request, the
+// choice of a physical device, the logical device with one compute queue, and a command pool.
+//
+// Device choice for `auto` (issue 4): a discrete GPU, else an integrated GPU, else another
+// hardware type, else a CPU implementation (Mesa lavapipe). When nothing usable exists the
+// constructor throws VulkanUnavailable with a message that says what is missing and how to fix
+// it; the caller (the backend factory) decides whether that is fatal or a fallback to the CPU.
+#pragma once
+
+#include <volk.h>
+
+#include <atomic>
+#include <cstdint>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hapfluid::sim::vulkan {
+
+// Any failure of a Vulkan call, with the call and the VkResult in the message.
+class VulkanError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// No loader, no driver (ICD), or no device that can run the backend: a reason to fall back.
+class VulkanUnavailable : public VulkanError {
+ public:
+  using VulkanError::VulkanError;
+};
+
+const char* result_name(VkResult result);
+// Throws VulkanError("<what>: VK_ERROR_...") unless result is VK_SUCCESS.
+void check(VkResult result, const char* what);
+
+enum class DevicePreference {
+  automatic,  // discrete > integrated > other hardware > CPU (lavapipe)
+  gpu,        // hardware only: discrete or integrated (or virtual) GPU
+  cpu,        // a CPU implementation only (lavapipe)
+};
+DevicePreference parse_device_preference(const std::string& text);  // "auto" | "gpu" | "cpu"
+
+struct ContextOptions {
+  DevicePreference device = DevicePreference::automatic;
+  // Khronos validation layer plus a debug messenger that counts warnings and errors. Tests
+  // always enable it; `haptic-sim --vk-validation` enables it in a run.
+  bool validation = false;
+  // With validation: also the layer's synchronization validation (missing barriers between
+  // passes are the bug class a compute pipeline is most prone to).
+  bool synchronization_validation = true;
+  // Print each validation message to stderr as it arrives (they are counted in any case).
+  bool print_validation_messages = true;
+};
+
+struct DeviceDescription {
+  std::string name;
+  std::string type;             // "discrete GPU", "integrated GPU", "CPU", ...
+  VkPhysicalDeviceType vk_type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  std::uint32_t api_version = 0;
+  std::string driver;           // driver name and info, e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"
+  bool has_compute_queue = false;
+  std::string version_string() const;  // "1.3.230"
+};
+
+// Every physical device the loader reports (empty when Vulkan is unavailable, never throws
+// VulkanUnavailable: for `--list-devices` and diagnostics).
+std::vector<DeviceDescription> list_devices(std::string* why_empty = nullptr);
+
+struct ValidationCounts {
+  std::uint32_t warnings = 0;
+  std::uint32_t errors = 0;
+};
+
+class Context {
+ public:
+  explicit Context(const ContextOptions& options);
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  VkInstance instance() const { return instance_; }
+  VkPhysicalDevice physical_device() const { return physical_device_; }
+  VkDevice device() const { return device_; }
+  VkQueue queue() const { return queue_; }
+  std::uint32_t queue_family() const { return queue_family_; }
+  VkCommandPool command_pool() const { return command_pool_; }
+  const VkPhysicalDeviceProperties& properties() const { return properties_; }
+  const VkPhysicalDeviceMemoryProperties& memory_properties() const { return memory_properties_; }
+  const DeviceDescription& description() const { return description_; }
+  bool validation_enabled() const { return validation_; }
+
+  // Timestamps on the compute queue (timestampValidBits > 0); period in ns per tick.
+  bool timestamps_supported() const { return timestamp_valid_bits_ > 0; }
+  double timestamp_period_ns() const { return properties_.limits.timestampPeriod; }
+  std::uint32_t subgroup_size() const { return subgroup_size_; }
+
+  // Warnings and errors reported by the validation layer since creation (0 without validation).
+  ValidationCounts validation_counts() const;
+  // The first messages (up to a few dozen), for test failure output.
+  std::vector<std::string> validation_messages() const;
+
+  // A one-time command buffer: record with fn, submit, wait (set-up uploads and read-backs).
+  template <class Fn>
+  void run_once(Fn&& fn) {
+    VkCommandBuffer cb = begin_one_time();
+    fn(cb);
+    end_one_time(cb);
+  }
+
+  // Called by the debug messenger callback.
+  void on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity, const char* message);
+
+ private:
+  void create_instance(const ContextOptions& options);
+  void choose_physical_device(DevicePreference preference);
+  void create_device();
+  void release();
+  VkCommandBuffer begin_one_time();
+  void end_one_time(VkCommandBuffer cb);
+
+  bool validation_ = false;
+  bool print_messages_ = true;
+  VkInstance instance_ = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_device_ = VK_NULL_HANDLE;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  std::uint32_t queue_family_ = 0;
+  std::uint32_t timestamp_valid_bits_ = 0;
+  std::uint32_t subgroup_size_ = 0;
+  VkCommandPool command_pool_ = VK_NULL_HANDLE;
+  VkFence one_time_fence_ = VK_NULL_HANDLE;
+  VkPhysicalDeviceProperties properties_{};
+  VkPhysicalDeviceMemoryProperties memory_properties_{};
+  DeviceDescription description_;
+
+  std::atomic<std::uint32_t> warnings_{0}, errors_{0};
+  mutable std::mutex messages_mutex_;
+  std::vector<std::string> messages_;
+};
+
+}  // namespace hapfluid::sim::vulkan

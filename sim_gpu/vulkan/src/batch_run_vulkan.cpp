@@ -1,0 +1,183 @@
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+#include <stdexcept>
+
+#include "hapfluid/config/scene.hpp"
+#include "hapfluid/sim/outputs.hpp"
+#include "hapfluid/sim_vulkan/backend.hpp"
+#include "hapfluid/sim_vulkan/vulkan_solver.hpp"
+
+namespace hapfluid::sim::vulkan {
+namespace {
+
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.z); }
+
+// stats.json of the cpu backend's batch run (same keys), plus the device, the GPU's per-pass
+// split and the validation counts.
+std::string stats_json(const VulkanSolver& solver, const BatchOptions& o, const BatchResult& r, double dt_min,
+                       double dt_max, bool complete, const std::string& error) {
+  const SimulationModel& m = solver.model();
+  const std::size_t fluid = m.fluid.size(), walls = m.wall_particle_count, statics = m.static_body_particle_count,
+                    bodies = m.body_particles.size();
+  const double steps = static_cast<double>(r.steps);
+  const double wall = r.wall_time_s > 0 ? r.wall_time_s : 1e-12;
+  const PhaseTimes t = solver.phase_times();
+  const PassTimes& g = solver.pass_times();
+  auto per_step_ms = [&](double s) { return num(steps > 0 ? 1000.0 * s / steps : 0.0); };
+  auto per_timed_step_ms = [&](double s) { return num(g.steps > 0 ? 1000.0 * s / static_cast<double>(g.steps) : 0.0); };
+  const ValidationCounts counts = solver.context().validation_counts();
+  std::ostringstream j;
+  j << "{\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
+  if (!complete) j << "  \"error\": \"" << json_escape(error) << "\",\n";
+  j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
+    << "  \"backend\": \"vulkan\",\n"
+    << "  \"device\": {\"name\": \"" << json_escape(solver.device().name) << "\", \"type\": \"" << solver.device().type
+    << "\", \"driver\": \"" << json_escape(solver.device().driver) << "\"},\n"
+    << "  \"particles\": {\"fluid\": " << fluid << ", \"boundary\": " << walls << ", \"static_body\": " << statics
+    << ", \"body\": " << bodies << ", \"total\": " << fluid + walls + statics + bodies << "},\n"
+    << "  \"steps\": " << r.steps << ",\n"
+    << "  \"dt_s\": {\"min\": " << num(dt_min) << ", \"max\": " << num(dt_max)
+    << ", \"mean\": " << num(steps > 0 ? r.simulated_time_s / steps : 0) << "},\n"
+    << "  \"simulated_time_s\": " << num(r.simulated_time_s) << ",\n"
+    << "  \"wall_time_s\": " << num(r.wall_time_s) << ",\n"
+    << "  \"steps_per_s\": " << num(steps / wall) << ",\n"
+    << "  \"particle_steps_per_s\": " << num(steps * static_cast<double>(fluid + bodies) / wall) << ",\n"
+    << "  \"real_time_factor\": " << num(r.simulated_time_s / wall) << ",\n"
+    << "  \"frames_exported\": " << r.frames_exported << ",\n"
+    << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"
+    << "  \"phase_ms_per_step\": {\"neighbour_search\": " << per_step_ms(t.neighbour_search_s)
+    << ", \"density\": " << per_step_ms(t.density_s) << ", \"forces\": " << per_step_ms(t.forces_s)
+    << ", \"bodies\": " << per_step_ms(t.bodies_s) << ", \"integration\": " << per_step_ms(t.integration_s) << "},\n"
+    << "  \"gpu_pass_ms_per_step\": {\"timed_steps\": " << g.steps << ", \"sort\": " << per_timed_step_ms(g.sort_s)
+    << ", \"density\": " << per_timed_step_ms(g.density_s) << ", \"forces\": " << per_timed_step_ms(g.forces_s)
+    << ", \"bodies\": " << per_timed_step_ms(g.bodies_s) << ", \"integration\": " << per_timed_step_ms(g.integration_s)
+    << ", \"reductions\": " << per_timed_step_ms(g.reductions_s) << "},\n"
+    << "  \"vulkan_validation\": {\"enabled\": " << (solver.context().validation_enabled() ? "true" : "false")
+    << ", \"warnings\": " << counts.warnings << ", \"errors\": " << counts.errors << "}\n}\n";
+  return j.str();
+}
+
+}  // namespace
+
+BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulkan, std::ostream& progress) {
+  const config::Scene scene = config::load_scene(o.scene);
+  const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;
+  VulkanSolverOptions solver_options;
+  solver_options.context.validation = vulkan.validation;
+  solver_options.context.device = vulkan.device;
+  // The device is chosen (or found missing) before any output is touched.
+  VulkanSolver solver(build_model(scene), solver_options);
+  const SimulationModel& m = solver.model();
+  progress << "haptic-sim: Vulkan device: " << solver.device().name << " (" << solver.device().type << ", "
+           << solver.device().driver << ")\n";
+
+  std::filesystem::create_directories(o.out / "particles");
+  std::filesystem::remove(o.out / "stats.json");
+  CsvFile bodies_csv(o.out / "bodies.csv", "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz");
+  CsvFile couplings_csv(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz");
+
+  BatchResult r;
+  double dt_min = 1e300, dt_max = 0;
+  const double frame = 1.0 / m.params.frame_rate_hz;
+  const int frames = std::max(1, static_cast<int>(std::ceil(duration / frame - 1e-9)));
+  double next_export = 0;
+  const bool per_substep_devices = !m.couplings.empty();
+  const auto start = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
+  auto set_devices = [&](double t) {
+    for (std::size_t d = 0; d < m.devices.size(); ++d)
+      solver.set_device_state(d, device_state_from(config::evaluate_motion(m.devices[d].motion, t)));
+  };
+  auto record = [&](double t) {
+    for (const RigidBody& b : m.bodies) {
+      const config::Pose pose = b.mesh_pose();
+      bodies_csv.row(num(t) + "," + b.name + "," + num(pose.position_m.x) + "," + num(pose.position_m.y) + "," +
+                     num(pose.position_m.z) + "," + num(pose.orientation.w) + "," + num(pose.orientation.x) + "," +
+                     num(pose.orientation.y) + "," + num(pose.orientation.z) + "," + vec(b.linear_velocity) + "," +
+                     vec(b.angular_velocity) + "," + vec(b.fluid_force) + "," + vec(b.fluid_torque));
+    }
+    for (const VirtualCoupling& c : m.couplings)
+      couplings_csv.row(num(t) + "," + m.devices[c.device].name + "," + m.bodies[c.body].name + "," + vec(c.device_force) +
+                        "," + vec(c.device_torque));
+  };
+  auto export_frame = [&](double t) {
+    if (o.export_every_s <= 0 || t + 1e-9 < next_export) return;
+    solver.sync_particles();  // particle arrays come back only for a frame
+    char name[64];
+    std::snprintf(name, sizeof name, "frame_%06d.vtk", r.frames_exported);
+    write_vtk_frame(o.out / "particles" / name, m, t);
+    ++r.frames_exported;
+    next_export += o.export_every_s;
+  };
+
+  std::string error;
+  try {
+    set_devices(0);
+    export_frame(0);
+    for (int k = 0; k < frames; ++k) {
+      const double t0 = k * frame, t1 = std::min(duration, (k + 1) * frame);
+      const double dt_limit = solver.stable_time_step();
+      const int substeps = std::max(1, static_cast<int>(std::ceil((t1 - t0) / dt_limit - 1e-9)));
+      const double dt = (t1 - t0) / substeps;
+      dt_min = std::min(dt_min, dt), dt_max = std::max(dt_max, dt);
+      if (per_substep_devices) {
+        for (int s = 0; s < substeps; ++s) {
+          set_devices(t0 + s * dt);
+          solver.step(dt);
+        }
+      } else {
+        solver.step_many(dt, substeps);  // one submission for the frame
+      }
+      r.steps = solver.steps();
+      r.simulated_time_s = t1;
+      record(t1);
+      export_frame(t1);
+      const double wall = elapsed();
+      if (o.progress_line || k + 1 == frames || (k + 1) % std::max(1, frames / 10) == 0) {
+        char line[160];
+        std::snprintf(line, sizeof line, "haptic-sim: t = %.3f / %.3f s, %llu steps, %.1f steps/s, real-time factor %.3f",
+                      t1, duration, static_cast<unsigned long long>(r.steps), r.steps / std::max(wall, 1e-9),
+                      t1 / std::max(wall, 1e-9));
+        progress << (o.progress_line ? "\r" : "") << line << (o.progress_line && k + 1 < frames ? "" : "\n") << std::flush;
+      }
+    }
+    solver.check_finite();
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  r.wall_time_s = elapsed();
+  if (!error.empty()) {
+    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, false, error));
+    throw std::runtime_error(error);
+  }
+  bodies_csv.finish();
+  couplings_csv.finish();
+  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, true, ""));
+  return r;
+}
+
+BatchResult run_batch_on_backend(const BatchOptions& options, const VulkanRunOptions& vulkan, std::ostream& progress) {
+  if (options.backend == "cpu") return run_batch(options, progress);
+  if (options.backend == "vulkan") return run_batch_vulkan(options, vulkan, progress);
+  if (options.backend == "auto") {
+    try {
+      return run_batch_vulkan(options, vulkan, progress);
+    } catch (const VulkanUnavailable& e) {
+      progress << "haptic-sim: notice: " << e.what() << "\n"
+               << "haptic-sim: notice: --backend auto: running on the cpu backend instead\n";
+      BatchOptions cpu = options;
+      cpu.backend = "cpu";
+      return run_batch(cpu, progress);
+    }
+  }
+  throw std::runtime_error("--backend " + options.backend + ": expected cpu, vulkan or auto");
+}
+
+}  // namespace hapfluid::sim::vulkan

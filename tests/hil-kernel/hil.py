@@ -1,0 +1,200 @@
+#!/usr/bin/env python3
+"""Hardware-in-the-loop suite on a real kernel: host-side driver.
+
+The development and CI kernels have no CAN, uhid or USB gadget support, so this boots Debian's
+own kernel under QEMU (TCG, no KVM needed) with a tiny busybox initramfs, shares the host root
+read-only into the guest over 9p, and runs the guest tests in `tests/hil-kernel/guest/` against
+the binaries built on the host, unchanged. One boot runs the whole suite; the guest writes JUnit
+XML and a summary line into a writable results share and powers off.
+
+    python3 tests/hil-kernel/hil.py --build build [--kernel default|rt] [--only REGEX]
+
+Exit status: 0 when every planned guest test passed; 1 when any failed, was missing or the guest
+hung; 2 when the suite could not run at all (kernel package not fetchable, QEMU missing). There
+is no "skipped": a suite that cannot run fails, loudly.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import re
+import selectors
+import shutil
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+from hil_kernel import KernelError, fetch_kernel  # noqa: E402
+from hil_initramfs import build_initramfs  # noqa: E402
+from hil_results import read_results  # noqa: E402
+
+HERE = pathlib.Path(__file__).resolve().parent
+SOURCE_DIR = HERE.parent.parent
+GUEST_DIR = HERE / "guest"
+QBOOT = pathlib.Path("/usr/share/qemu/qboot.rom")
+
+# Per-test time limit inside the guest when a test does not declare `# hil-timeout: N` (seconds).
+DEFAULT_TEST_TIMEOUT_S = 60
+# Hard host-side limit for the whole guest (boot, tests, power-off) when --timeout is not given:
+# the suite takes ~2 min on a loaded 2-core host; a guest still running at 5 min is hung (each
+# test also has its own limit inside the guest, so this only catches a stuck kernel or init).
+HARD_LIMIT_S = 300
+
+
+def log(msg: str) -> None:
+    print(f"hil: {msg}", file=sys.stderr, flush=True)
+
+
+def plan_tests(only: str | None) -> list[tuple[str, int, pathlib.Path]]:
+    """The guest tests: every guest/t_*.sh, in name order, with its declared time limit."""
+    tests = []
+    for path in sorted(GUEST_DIR.glob("t_*.sh")):
+        name = path.stem[2:]
+        if only and not re.search(only, name):
+            continue
+        timeout = DEFAULT_TEST_TIMEOUT_S
+        m = re.search(r"^# hil-timeout:\s*(\d+)", path.read_text(), re.M)
+        if m:
+            timeout = int(m.group(1))
+        tests.append((name, timeout, path))
+    return tests
+
+
+def ensure_host_tools() -> None:
+    """QEMU, busybox, cpio and kmod come from `scripts/install-deps.sh hil`; run it if missing."""
+    need = {"qemu-system-x86_64": "qemu-system-x86", "cpio": "cpio", "depmod": "kmod"}
+    missing = [pkg for tool, pkg in need.items() if shutil.which(tool) is None
+               and not pathlib.Path("/usr/sbin", tool).exists()]
+    if not pathlib.Path("/bin/busybox").exists():
+        missing.append("busybox-static")
+    if not QBOOT.exists():
+        missing.append("qemu-system-x86 (qboot.rom)")
+    if missing or not pathlib.Path("/usr/bin/udevadm").exists():
+        log(f"installing the HIL host packages ({', '.join(missing) or 'udev'})")
+        subprocess.run(["bash", str(SOURCE_DIR / "scripts/install-deps.sh"), "hil"], check=False)
+    still = [t for t in need if shutil.which(t) is None and not pathlib.Path("/usr/sbin", t).exists()]
+    if still or not QBOOT.exists() or not pathlib.Path("/bin/busybox").exists():
+        raise KernelError("the HIL suite needs qemu-system-x86, busybox-static, cpio and kmod: "
+                          "run `sudo bash scripts/install-deps.sh hil`")
+
+
+def write_plan(results: pathlib.Path, tests, build: pathlib.Path, flavour: str) -> None:
+    results.mkdir(parents=True, exist_ok=True)
+    with open(results / "plan.tsv", "w") as f:
+        for name, timeout, path in tests:
+            f.write(f"{name}\t{timeout}\t{path}\n")
+    with open(results / "plan.env", "w") as f:
+        f.write(f"HIL_SRC={SOURCE_DIR}\nHIL_BUILD={build}\nHIL_FLAVOUR={flavour}\n")
+
+
+def boot(kernel: pathlib.Path, initrd: pathlib.Path, results: pathlib.Path,
+         hard_timeout_s: float, verbose: bool) -> tuple[int | None, list[str]]:
+    """Boots the guest, streams its console as progress, kills it past the hard limit.
+
+    Returns (qemu exit status or None when it had to be killed, console lines)."""
+    cmd = [
+        "qemu-system-x86_64", "-accel", "tcg", "-cpu", "max", "-smp", "1", "-m", "1024",
+        "-nographic", "-no-reboot", "-net", "none", "-bios", str(QBOOT),
+        "-kernel", str(kernel), "-initrd", str(initrd),
+        "-append", "console=ttyS0 quiet panic=-1 loglevel=3",
+        "-virtfs", "local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap",
+        "-virtfs", f"local,path={results},mount_tag=results,security_model=none",
+    ]
+    console_path = results / "console.log"
+    lines: list[str] = []
+    start = time.monotonic()
+    proc = subprocess.Popen(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT)
+    sel = selectors.DefaultSelector()
+    sel.register(proc.stdout, selectors.EVENT_READ)
+    buf = b""
+    killed = False
+    with open(console_path, "wb") as console:
+        while True:
+            left = hard_timeout_s - (time.monotonic() - start)
+            if left <= 0:
+                log(f"guest did not power off within {hard_timeout_s:.0f} s: killing QEMU "
+                    f"(pid {proc.pid})")
+                proc.kill()
+                killed = True
+                break
+            if not sel.select(timeout=min(left, 1.0)):
+                if proc.poll() is not None:
+                    break
+                continue
+            chunk = os.read(proc.stdout.fileno(), 65536)
+            if not chunk:
+                break
+            console.write(chunk)
+            buf += chunk
+            while b"\n" in buf:
+                raw, buf = buf.split(b"\n", 1)
+                line = raw.decode("utf-8", "replace").rstrip("\r")
+                lines.append(line)
+                t = time.monotonic() - start
+                if verbose or line.startswith("HIL"):
+                    print(f"  [{t:6.1f} s] {line}", file=sys.stderr, flush=True)
+    if buf:
+        lines.append(buf.decode("utf-8", "replace"))
+    proc.wait()
+    return (None if killed else proc.returncode), lines
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--build", default="build", help="CMake build folder (binaries in BUILD/bin)")
+    ap.add_argument("--kernel", default="default", choices=["default", "rt"],
+                    help="Debian kernel flavour: default (linux-image-amd64) or rt (PREEMPT_RT)")
+    ap.add_argument("--only", help="run only guest tests whose name matches this regex")
+    ap.add_argument("--timeout", type=float, help="hard wall-clock limit for the guest, seconds")
+    ap.add_argument("--verbose", action="store_true", help="echo the whole guest console")
+    args = ap.parse_args()
+
+    wall0 = time.monotonic()
+    build = (SOURCE_DIR / args.build).resolve() if not os.path.isabs(args.build) \
+        else pathlib.Path(args.build)
+    cache = build / "hil"
+    tests = plan_tests(args.only)
+    if not tests:
+        log("no guest test matches")
+        return 2
+    try:
+        ensure_host_tools()
+        kern = fetch_kernel(args.kernel, cache / "kernel", log)
+        initrd = build_initramfs(kern, cache / f"initrd-{kern.version}.cpio", log)
+    except KernelError as e:
+        log(f"FAILED: cannot run the hardware-in-the-loop suite: {e}")
+        return 2
+
+    results = cache / f"results-{args.kernel}"
+    if results.exists():
+        shutil.rmtree(results)
+    write_plan(results, tests, build, args.kernel)
+    hard = args.timeout or HARD_LIMIT_S
+    log(f"booting {kern.package} ({kern.version}) under QEMU/TCG: {len(tests)} guest tests, "
+        f"hard limit {hard:.0f} s")
+    status, lines = boot(kern.vmlinux, initrd, results, hard, args.verbose)
+
+    report = read_results(results, [name for name, _, _ in tests])
+    wall = time.monotonic() - wall0
+    for name, outcome in report.outcomes.items():
+        if outcome.status != "pass":
+            log(f"--- {name}: {outcome.status.upper()} ({outcome.message}); log tail:")
+            for line in outcome.log_tail:
+                print(f"    {line}", file=sys.stderr)
+    if status is None or report.summary is None:
+        log("the guest console ended with:")
+        for line in lines[-25:]:
+            print(f"    {line}", file=sys.stderr)
+    ok = status is not None and report.summary is not None and report.all_passed
+    for line in sorted({l for l in lines if l.startswith("HIL-KNOWN-BUG")}):
+        log(f"tolerated {line.removeprefix('HIL-')}")
+    log(f"{'PASSED' if ok else 'FAILED'}: {report.passed}/{len(tests)} guest tests passed on "
+        f"{kern.package}; wall time {wall:.1f} s (results: {results})")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
