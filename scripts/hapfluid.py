@@ -5,10 +5,11 @@
                     [--windowed] [--no-render] [--shm-prefix P] [--batch]
 
 A live run starts, in this order:
-  haptic-sim --live        the fluid, simulated time following the wall clock
   haptic-fake-device       one per rig device, playing the scene's scripted hand (--motion scene:...)
-  haptic-rt                the 1 kHz loop on the rig's devices (loopback transport)
+  haptic-rt                the 1 kHz loop on the rig's devices (loopback transport); it engages
+                           the devices at zero wrench
   haptic-trace             drains the loop's trace ring to trace.csv
+  haptic-sim --live        the fluid, simulated time following the wall clock; its wrench fades in
   haptic-render --live     headless PNG frames (or a window with --windowed)
 runs for --duration seconds (default 10), stops them in reverse dependency order (render, loop,
 trace, sim, devices), checks every exit code and leaves under out/<scene>-<timestamp>/:
@@ -66,6 +67,34 @@ def scene_device_for(scene: dict, rig_name: str):
         if d.get("name") == rig_name:
             return d
     return None
+
+
+def delayed_motion_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: float) -> pathlib.Path:
+    """A copy of the scene for the fake devices, every scripted motion segment starting delay_s
+    later: the hands hold their start poses while the loop engages and the fluid settles (the
+    simulator starts last). Mesh paths are made absolute so the copy can live anywhere."""
+    lines, in_motion, has_start = [], False, False
+
+    def close_segment():
+        if in_motion and not has_start:
+            lines.append(f"start_s = {delay_s:.6g}")
+    for line in scene_path.read_text().splitlines():
+        stripped = line.split("#")[0].strip()
+        if stripped.startswith("["):
+            if not stripped.startswith("[[devices.motion.keyframes]]"):
+                close_segment()
+                in_motion, has_start = stripped == "[[devices.motion]]", False
+        elif in_motion and re.match(r"(start_s|stop_s)\s*=", stripped):
+            key, value = [v.strip() for v in stripped.split("=", 1)]
+            has_start |= key == "start_s"
+            line = f"{key} = {float(value.replace('_', '')) + delay_s:.6g}"
+        line = re.sub(r'mesh\s*=\s*"(\.\./[^"]+)"', lambda m: f'mesh = "{(scene_path.parent / m.group(1)).resolve()}"', line)
+        lines.append(line)
+    close_segment()
+    path = out / "scene_devices.toml"
+    path.write_text(f"# {scene_path.name} for the fake devices: motions start {delay_s} s later (lead-in)\n" +
+                    "\n".join(lines) + "\n")
+    return path
 
 
 def default_rig(scene: dict) -> pathlib.Path:
@@ -210,18 +239,13 @@ def run_live(args, scene_path, out, bin_dir):
           f"(shm prefix {prefix}); logs in {out / 'logs'}", flush=True)
     ok = True
     device_logs = {}
+    device_scene = delayed_motion_scene(scene_path, out, args.lead_in)
     started = time.monotonic()
     try:
-        sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
-                                         "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
-                                         "--threads", str(args.sim_threads)],
-                          nice=-5)  # feeds the haptic loop: ahead of builds and the renderer
-        if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
-            raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
         for dev in rig.get("devices", []):
             name = dev["name"]
             sdev = scene_device_for(scene, name)
-            motion = f"scene:{scene_path}:{sdev['name']}" if sdev else "hold"
+            motion = f"scene:{device_scene}:{sdev['name']}" if sdev else "hold"
             device_logs[name] = out / f"device_{name}.csv"
             p = stack.start(f"haptic-fake-device-{name}",
                             [bin_dir / "haptic-fake-device", "--rig", rig_path, "--device", name, "--motion", motion,
@@ -230,10 +254,21 @@ def run_live(args, scene_path, out, bin_dir):
             line = p.stdout.readline()  # "haptic-fake-device: ready on ..."
             if "ready" not in line:
                 raise RuntimeError(f"haptic-fake-device for '{name}' did not start: {line.strip()}")
-        stack.start("haptic-rt", [bin_dir / "haptic-rt", "--rig", rig_path, "--shm-prefix", prefix,
-                                  "--flight-dir", out / "flight"])
+        rt = stack.start("haptic-rt", [bin_dir / "haptic-rt", "--rig", rig_path, "--shm-prefix", prefix,
+                                       "--flight-dir", out / "flight"])
+        # The loop engages its devices at zero wrench before the sim's wrench fades in: a loop
+        # started under a sim already pushing beyond the rig's engage_threshold_n would wait.
+        if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.device_states"), 15, rt):
+            raise RuntimeError("haptic-rt did not start (see logs/haptic-rt.log)")
+        time.sleep(0.5)
         stack.start("haptic-trace", [bin_dir / "haptic-trace", "--out", out / "trace.csv", "--shm-prefix", prefix,
                                      "--wait", "10"])
+        sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
+                                         "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
+                                         "--threads", str(args.sim_threads)],
+                          nice=-5)  # feeds the haptic loop: ahead of builds and the renderer
+        if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
+            raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
         if not args.no_render and not (bin_dir / "haptic-render").exists():
             print("hapfluid: haptic-render is not built: running without the renderer", file=sys.stderr)
         elif not args.no_render:
@@ -330,6 +365,8 @@ def main():
     run.add_argument("--windowed", action="store_true", help="render in a window instead of PNG frames")
     run.add_argument("--no-render", action="store_true", help="run without the renderer")
     run.add_argument("--shm-prefix", default=None, help="shared-memory prefix (default: private to this run)")
+    run.add_argument("--lead-in", type=float, default=1.5,
+                     help="seconds the fake hands hold still before their script starts (loop engages, fluid settles)")
     run.add_argument("--sim-threads", type=int, default=max(1, (os.cpu_count() or 2) - 1),
                      help="simulator threads (default: one core left for the loop and the devices)")
     run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")

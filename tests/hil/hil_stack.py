@@ -3,16 +3,25 @@ haptic-render, haptic-sim-standin) as separate processes over the loopback trans
 
 Every stack gets a private copy of a shipped rig (own loopback socket paths, own shm prefix) so
 tests never collide with each other, with `make run` or with installed services. Processes are
-tracked by the Popen objects the harness started and stopped by pid, never by name."""
+tracked by the Popen objects the harness started and stopped by pid, never by name.
+
+Start order, as `make run` and the systemd target: devices, then haptic-rt (it engages its
+devices at zero wrench), then the simulator, whose wrench then fades in. A loop started under a
+sim already pushing more than the rig's engage_threshold_n waits for the wrench to drop below it."""
 import csv
 import os
 import pathlib
 import re
 import signal
 import subprocess
+import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts"))
+from hapfluid import delayed_motion_scene  # noqa: E402  (the launcher's lead-in, shared)
+
+LEAD_IN_S = 1.5  # scripted hands hold still this long (the loop engages, the fluid settles)
 SCENES = ROOT / "config" / "scenes"
 RIGS = ROOT / "config" / "rigs"
 
@@ -77,6 +86,11 @@ class Stack:
 
     def fake_device(self, device="hand", motion="hold", name=None, extra=()):
         name = name or f"fake-{device}"
+        if motion.startswith("scene:"):  # scene:FILE:DEVICE -> the same scene with the lead-in
+            scene_file, scene_device = motion[len("scene:"):].rsplit(":", 1)
+            copy_dir = self.dir / f"{name}-scene"
+            copy_dir.mkdir(exist_ok=True)
+            motion = f"scene:{delayed_motion_scene(pathlib.Path(scene_file), copy_dir, LEAD_IN_S)}:{scene_device}"
         # A real device's MCU never misses its 1 ms tick; where allowed, the emulator gets a
         # real-time priority (below haptic-rt's 80) so a loaded CI machine does not fake link faults.
         p = self._start(name, [*FIFO, self.binary("haptic-fake-device"), "--rig", self.rig, "--device", device, "--motion",
@@ -87,8 +101,14 @@ class Stack:
         return p
 
     def rt(self, name="rt", extra=()):
-        return self._start(name, [self.binary("haptic-rt"), "--rig", self.rig, "--shm-prefix", self.prefix,
-                                  "--trace", self.dir / f"{name}-trace.csv", "--flight-dir", self.dir / "flight", *extra])
+        """Starts haptic-rt and returns once its loop publishes device states and has had 0.5 s to
+        take its devices' frames and engage them (at zero wrench when no sim runs yet)."""
+        p = self._start(name, [self.binary("haptic-rt"), "--rig", self.rig, "--shm-prefix", self.prefix,
+                               "--trace", self.dir / f"{name}-trace.csv", "--flight-dir", self.dir / "flight", *extra])
+        self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.device_states") or p.poll() is not None, 15)
+        assert p.poll() is None, f"haptic-rt stopped: {self.log(name)}"
+        time.sleep(0.5)
+        return p
 
     def sim(self, scene, name="sim", extra=()):
         p = self._start(name, [self.binary("haptic-sim"), "--live", "--scene", SCENES / f"{scene}.toml",
