@@ -75,10 +75,12 @@ class Stack:
         self.rig = tmp_path / "rig.toml"
         self.rig.write_text(text)
         self.procs = {}
+        self.started_at = {}
 
     # ---- processes -------------------------------------------------------------------------
     def _start(self, name, args, stdout=None, nice=0):
         log = open(self.dir / f"{name}.log", "a")
+        self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True,
                              preexec_fn=(lambda: _try_nice(nice)) if nice else None)
         self.procs[name] = p

@@ -87,9 +87,12 @@ def test_two_devices_on_one_bucket_share_its_weight(binary, tmp_path):
     finally:
         stack.close()
     assert codes == {"rt": 0, "sim": 0, "fake-left": 0, "fake-right": 0}
-    # Simulated time starts after the loop (sim last); the hands tilt from LEAD_IN_S + 1 s of
-    # device time on, about 1 s of simulated time later: [1.0, 1.6] s is settled and level.
-    rows = [r for r in read_csv(tmp_path / "sim" / "couplings.csv") if 1.0 < r["t"] < 1.6]
+    # The hands hold level until LEAD_IN_S + 1 s of their own time (the scene's first tilt); each
+    # fake device runs its own clock, so once they tilt they are not in step and the couplings
+    # fight. Weight sharing is judged on the settled, level stretch (from 0.6 s of simulated time).
+    first_tilt_ns = (min(stack.started_at["fake-left"], stack.started_at["fake-right"]) + LEAD_IN_S + 1.0) * 1e9
+    rows = [r for r in read_csv(tmp_path / "sim" / "couplings.csv") if r["t"] > 0.6 and r["publish_ns"] < first_tilt_ns - 1e8]
+    assert len(rows) > 200, "too short a level stretch to judge (machine too slow?)"
     down = {d: -np.mean([r["fz"] for r in rows if r["device"] == d]) for d in ("left", "right")}
     total = down["left"] + down["right"]
     assert total > 1.0, f"the hands carry {total:.2f} N: the bucket's weight is missing"
