@@ -69,11 +69,24 @@ def scene_device_for(scene: dict, rig_name: str):
     return None
 
 
-def delayed_motion_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: float) -> pathlib.Path:
-    """A copy of the scene for the fake devices, every scripted motion segment starting delay_s
-    later: the hands hold their start poses while the loop engages and the fluid settles (the
-    simulator starts last). Mesh paths are made absolute so the copy can live anywhere."""
-    lines, in_motion, has_start = [], False, False
+def _vec(text: str) -> list[float]:
+    return [float(v) for v in text.strip().strip("[]").split(",")]
+
+
+def _fmt(v) -> str:
+    return "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
+
+
+def device_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: float, offsets: dict | None = None) -> pathlib.Path:
+    """The scene as the fake devices play it:
+      * every scripted motion segment starts delay_s later (lead-in): the hands hold their start
+        poses while the loop engages and the fluid settles (the simulator starts last);
+      * positions in the DEVICE frame: x_device = x_scene - offset for devices in `offsets` (the
+        rig's workspace mapping x_scene = offset + x_device, scale 1, no rotation), so the
+        emulated arm stays inside its mechanical workspace;
+      * mesh paths absolute, so the copy can live anywhere."""
+    offsets = offsets or {}
+    lines, in_motion, has_start, section, device = [], False, False, "", None
 
     def close_segment():
         if in_motion and not has_start:
@@ -81,18 +94,28 @@ def delayed_motion_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: f
     for line in scene_path.read_text().splitlines():
         stripped = line.split("#")[0].strip()
         if stripped.startswith("["):
+            section = stripped
+            if stripped == "[[devices]]":
+                device = None
             if not stripped.startswith("[[devices.motion.keyframes]]"):
                 close_segment()
                 in_motion, has_start = stripped == "[[devices.motion]]", False
+        elif section == "[[devices]]" and re.match(r"name\s*=", stripped):
+            device = stripped.split("=", 1)[1].strip().strip('"')
         elif in_motion and re.match(r"(start_s|stop_s)\s*=", stripped):
             key, value = [v.strip() for v in stripped.split("=", 1)]
             has_start |= key == "start_s"
             line = f"{key} = {float(value.replace('_', '')) + delay_s:.6g}"
+        elif device in offsets and (
+                (section == "[[devices]]" and re.match(r"start_position_m\s*=", stripped)) or
+                (section == "[[devices.motion.keyframes]]" and re.match(r"position_m\s*=", stripped))):
+            key, value = [v.strip() for v in stripped.split("=", 1)]
+            line = f"{key} = {_fmt([a - b for a, b in zip(_vec(value), offsets[device])])}"
         line = re.sub(r'mesh\s*=\s*"(\.\./[^"]+)"', lambda m: f'mesh = "{(scene_path.parent / m.group(1)).resolve()}"', line)
         lines.append(line)
     close_segment()
     path = out / "scene_devices.toml"
-    path.write_text(f"# {scene_path.name} for the fake devices: motions start {delay_s} s later (lead-in)\n" +
+    path.write_text(f"# {scene_path.name} for the fake devices: motions {delay_s} s later (lead-in), device frame\n" +
                     "\n".join(lines) + "\n")
     return path
 
@@ -101,18 +124,44 @@ def default_rig(scene: dict) -> pathlib.Path:
     return RIGS / ("fake_dual.toml" if len(scene.get("devices", [])) >= 2 else "fake_single.toml")
 
 
-def private_rig(rig: pathlib.Path, out: pathlib.Path, tag: str) -> pathlib.Path:
-    """A copy of the rig whose loopback sockets are private to this run (paths < 108 bytes)."""
-    text = rig.read_text()
+def private_rig_text(text: str, scene: dict, tag: str) -> tuple[str, dict]:
+    """The rig with loopback sockets private to this run (paths < 108 bytes) and, for loopback
+    (emulated) devices with an identity workspace mapping, the mapping centred on the scene hand's
+    start position: the emulated arm starts at the middle of its workspace (its end stops are at
+    +-0.3 m) instead of pressing against an end stop. Returns (text, {device: offset})."""
     names = []
 
     def replace(match):
         names.append(match.group(1))
         return f'address = "/tmp/hapfluid-{tag}-{len(names)}.sock"'
-    text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', replace, text)
+    blocks = re.split(r"(?m)^(?=\[\[devices\]\])", text)
+    offsets = {}
+    for i, block in enumerate(blocks):
+        if not block.startswith("[[devices]]") or 'kind = "loopback"' not in block:
+            continue
+        name = re.search(r'(?m)^name\s*=\s*"([^"]+)"', block).group(1)
+        sdev = scene_device_for(scene, name)
+        mapping = re.search(r"(?m)^mapping\s*=.*$", block)
+        identity = mapping is None or re.fullmatch(
+            r"mapping\s*=\s*\{\s*offset_m\s*=\s*\[0(\.0)?,\s*0(\.0)?,\s*0(\.0)?\],\s*scale\s*=\s*1(\.0)?,\s*"
+            r"rotation\s*=\s*\[1(\.0)?,\s*0(\.0)?,\s*0(\.0)?,\s*0(\.0)?\]\s*\}", mapping.group(0).strip())
+        if sdev is None or not identity:
+            continue
+        offset = [float(v) for v in sdev.get("start_position_m", [0.0, 0.0, 0.0])]
+        line = f"mapping = {{ offset_m = {_fmt(offset)}, scale = 1.0, rotation = [1.0, 0.0, 0.0, 0.0] }}"
+        block = block.replace(mapping.group(0), line) if mapping else re.sub(
+            r'(?m)^(name\s*=\s*"[^"]+"\n)', lambda m: m.group(1) + line + "\n", block, count=1)
+        blocks[i] = block
+        offsets[name] = offset
+    text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', replace, "".join(blocks))
+    return text, offsets
+
+
+def private_rig(rig: pathlib.Path, out: pathlib.Path, tag: str, scene: dict) -> tuple[pathlib.Path, dict]:
+    text, offsets = private_rig_text(rig.read_text(), scene, tag)
     copy = out / "rig.toml"
-    copy.write_text(f"# {rig} with private loopback sockets for this run\n" + text)
-    return copy
+    copy.write_text(f"# {rig} with private loopback sockets and scene-centred emulated arms for this run\n" + text)
+    return copy, offsets
 
 
 def try_nice(increment: int):
@@ -220,7 +269,7 @@ def run_live(args, scene_path, out, bin_dir):
     scene = load_toml(scene_path)
     rig_src = pathlib.Path(args.rig) if args.rig else default_rig(scene)
     tag = f"{os.getpid()}-{int(time.time()) % 100000}"
-    rig_path = private_rig(rig_src, out, tag)
+    rig_path, offsets = private_rig(rig_src, out, tag, scene)
     rig = load_toml(rig_path)
     prefix = args.shm_prefix or f"hapfluid-run-{tag}"
     duration = args.duration if args.duration else float(scene.get("duration_s", 10.0))
@@ -239,13 +288,13 @@ def run_live(args, scene_path, out, bin_dir):
           f"(shm prefix {prefix}); logs in {out / 'logs'}", flush=True)
     ok = True
     device_logs = {}
-    device_scene = delayed_motion_scene(scene_path, out, args.lead_in)
+    device_scene_path = device_scene(scene_path, out, args.lead_in, offsets)
     started = time.monotonic()
     try:
         for dev in rig.get("devices", []):
             name = dev["name"]
             sdev = scene_device_for(scene, name)
-            motion = f"scene:{device_scene}:{sdev['name']}" if sdev else "hold"
+            motion = f"scene:{device_scene_path}:{sdev['name']}" if sdev else "hold"
             device_logs[name] = out / f"device_{name}.csv"
             p = stack.start(f"haptic-fake-device-{name}",
                             [bin_dir / "haptic-fake-device", "--rig", rig_path, "--device", name, "--motion", motion,

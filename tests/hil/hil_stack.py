@@ -19,7 +19,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
-from hapfluid import delayed_motion_scene  # noqa: E402  (the launcher's lead-in, shared)
+from hapfluid import device_scene, load_toml, private_rig_text  # noqa: E402  (shared with the launcher)
 
 LEAD_IN_S = 1.5  # scripted hands hold still this long (the loop engages, the fluid settles)
 SCENES = ROOT / "config" / "scenes"
@@ -61,17 +61,17 @@ def norm3(row, prefix) -> float:
 
 
 class Stack:
-    def __init__(self, binary, tmp_path: pathlib.Path, rig="fake_single.toml", tag="hil"):
+    def __init__(self, binary, tmp_path: pathlib.Path, rig="fake_single.toml", tag="hil", lead_in_s=LEAD_IN_S,
+                 scene="spoon_stirring"):
+        """A private copy of a shipped rig, as `make run` makes it: own loopback sockets and shm
+        prefix, emulated arms' workspaces centred on `scene`'s hands (hapfluid.private_rig_text)."""
         self.binary = binary
+        self.lead_in_s = lead_in_s
         self.dir = tmp_path
         self.tag = f"{tag}-{os.getpid()}-{time.monotonic_ns() % 10_000_000}"
         self.prefix = f"hapfluid-hil-{self.tag}"
-        self.sockets = []
-
-        def private(match):
-            self.sockets.append(f"/tmp/hapfluid-{self.tag}-{len(self.sockets)}.sock")
-            return f'address = "{self.sockets[-1]}"'
-        text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', private, (RIGS / rig).read_text())
+        text, self.offsets = private_rig_text((RIGS / rig).read_text(), load_toml(SCENES / f"{scene}.toml"), self.tag)
+        self.sockets = re.findall(r'address = "(/tmp/hapfluid-[^"]+\.sock)"', text)
         self.rig = tmp_path / "rig.toml"
         self.rig.write_text(text)
         self.procs = {}
@@ -92,7 +92,7 @@ class Stack:
             scene_file, scene_device = motion[len("scene:"):].rsplit(":", 1)
             copy_dir = self.dir / f"{name}-scene"
             copy_dir.mkdir(exist_ok=True)
-            motion = f"scene:{delayed_motion_scene(pathlib.Path(scene_file), copy_dir, LEAD_IN_S)}:{scene_device}"
+            motion = f"scene:{device_scene(pathlib.Path(scene_file), copy_dir, self.lead_in_s, self.offsets)}:{scene_device}"
         # A real device's MCU never misses its 1 ms tick; where allowed, the emulator gets a
         # real-time priority (below haptic-rt's 80) so a loaded CI machine does not fake link faults.
         p = self._start(name, [*FIFO, self.binary("haptic-fake-device"), "--rig", self.rig, "--device", device, "--motion",

@@ -75,24 +75,25 @@ def test_a_clean_stop_leaves_no_shared_memory_or_sockets(stirring):
 def test_two_devices_on_one_bucket_share_its_weight(binary, tmp_path):
     # §6.4.4, fig. 11: both hands hold the bucket level for the first second; each carries a
     # share of the bucket's and the water's weight (neither holds it alone, neither pushes it up).
-    stack = Stack(binary, tmp_path, rig="fake_dual.toml", tag="bucket")
+    stack = Stack(binary, tmp_path, rig="fake_dual.toml", tag="bucket", lead_in_s=3.0,
+                  scene="bucket_bimanual")
     scene = SCENES / "bucket_bimanual.toml"
     try:
         stack.fake_device("left", motion=f"scene:{scene}:left")
         stack.fake_device("right", motion=f"scene:{scene}:right")
         stack.rt()
         stack.sim("bucket_bimanual", extra=("--threads", "2"))
-        time.sleep(3.0)
+        time.sleep(3.5)
         codes = {n: stack.stop(n) for n in ("rt", "sim", "fake-left", "fake-right")}
     finally:
         stack.close()
     assert codes == {"rt": 0, "sim": 0, "fake-left": 0, "fake-right": 0}
-    # The hands hold level until LEAD_IN_S + 1 s of their own time (the scene's first tilt); each
+    # The hands hold level until lead-in + 1 s of their own time (the scene's first tilt); each
     # fake device runs its own clock, so once they tilt they are not in step and the couplings
-    # fight. Weight sharing is judged on the settled, level stretch (from 0.6 s of simulated time).
-    first_tilt_ns = (min(stack.started_at["fake-left"], stack.started_at["fake-right"]) + LEAD_IN_S + 1.0) * 1e9
-    rows = [r for r in read_csv(tmp_path / "sim" / "couplings.csv") if r["t"] > 0.6 and r["publish_ns"] < first_tilt_ns - 1e8]
-    assert len(rows) > 200, "too short a level stretch to judge (machine too slow?)"
+    # fight. Weight sharing is judged on the settled, level stretch (from 1 s of simulated time).
+    first_tilt_ns = (min(stack.started_at["fake-left"], stack.started_at["fake-right"]) + stack.lead_in_s + 1.0) * 1e9
+    rows = [r for r in read_csv(tmp_path / "sim" / "couplings.csv") if r["t"] > 1.0 and r["publish_ns"] < first_tilt_ns - 1e8]
+    assert len(rows) > 400, "too short a level stretch to judge (machine too slow?)"
     down = {d: -np.mean([r["fz"] for r in rows if r["device"] == d]) for d in ("left", "right")}
     total = down["left"] + down["right"]
     assert total > 1.0, f"the hands carry {total:.2f} N: the bucket's weight is missing"
