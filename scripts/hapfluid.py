@@ -186,6 +186,7 @@ class Stack:
     def __init__(self, out: pathlib.Path):
         self.out = out
         self.procs = []  # (name, Popen, log file)
+        self.started_at = {}
 
     def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0):
         log = open(self.out / "logs" / f"{name}.log", "w")
@@ -195,6 +196,7 @@ class Stack:
         p = subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE if stdout_pipe else log,
                              stderr=log, text=True, preexec_fn=preexec)
         self.procs.append((name, p, log))
+        self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         return p
 
     def running(self, name):
@@ -252,15 +254,27 @@ def read_device_log(path: pathlib.Path):
         return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
 
 
-def device_wrench_csv(logs: dict, out: pathlib.Path) -> pathlib.Path:
-    """The fake devices' logs as one t,device,fx..tz CSV (force applied on the hand), for plotting."""
+def sim_start_monotonic_s(couplings: pathlib.Path):
+    """CLOCK_MONOTONIC second at which the live sim's time started (first row: publish_ns - wall_s)."""
+    try:
+        with couplings.open(newline="") as f:
+            row = next(csv.DictReader(f))
+        return float(row["publish_ns"]) * 1e-9 - float(row["wall_s"])
+    except (OSError, StopIteration, KeyError, ValueError):
+        return None
+
+
+def device_wrench_csv(logs: dict, out: pathlib.Path, shift_s: dict | None = None) -> pathlib.Path:
+    """The fake devices' logs as one t,device,fx..tz CSV (force applied on the hand), for plotting.
+    shift_s[name] moves a device's own clock onto the sim's (its start minus the sim's start)."""
+    shift_s = shift_s or {}
     path = out / "device_wrenches.csv"
     with path.open("w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["t", "device", "fx", "fy", "fz", "tx", "ty", "tz"])
         for name, rows in logs.items():
             for r in rows[::5]:  # 200 Hz is plenty for a plot
-                w.writerow([r["t_s"], name, r["applied_fx"], r["applied_fy"], r["applied_fz"],
+                w.writerow([f"{r['t_s'] + shift_s.get(name, 0.0):.6f}", name, r["applied_fx"], r["applied_fy"], r["applied_fz"],
                             r["applied_tx"], r["applied_ty"], r["applied_tz"]])
     return path
 
@@ -348,10 +362,11 @@ def run_live(args, scene_path, out, bin_dir):
     if leftovers:
         ok = False
         print(f"hapfluid: shared memory left behind: {leftovers}", file=sys.stderr)
-    return ok, rig, device_logs
+    return ok, rig, device_logs, stack.started_at
 
 
-def post_process(out, rig, device_logs, scene_name):
+def post_process(out, rig, device_logs, scene_name, started=None):
+    started = started or {}
     py = sys.executable
     summary = {"scene": scene_name, "out": str(out)}
     stats_path = out / "sim" / "stats.json"
@@ -363,7 +378,12 @@ def post_process(out, rig, device_logs, scene_name):
         summary["fluid_particles"] = stats["particles"]["fluid"]
     logs = {n: read_device_log(p) for n, p in device_logs.items() if p.exists()}
     if logs:
-        dev_csv = device_wrench_csv(logs, out)
+        # One time axis: the sim's (wall clock since it started, = simulated time at real-time
+        # factor 1); each device log moved by its start time (launcher's clock, +-10 ms).
+        sim_start = sim_start_monotonic_s(out / "sim" / "couplings.csv")
+        shift = {n: started[f"haptic-fake-device-{n}"] - sim_start for n in logs
+                 if sim_start is not None and f"haptic-fake-device-{n}" in started}
+        dev_csv = device_wrench_csv(logs, out, shift)
         summary["max_force_on_hand_n"] = {
             n: round(max((math.hypot(r["applied_fx"], r["applied_fy"], r["applied_fz"]) for r in rows), default=0), 3)
             for n, rows in logs.items()}
@@ -441,8 +461,8 @@ def main():
         return subprocess.run(command).returncode
 
     started = time.monotonic()
-    ok, rig, device_logs = run_live(args, scene_path, out, bin_dir)
-    summary = post_process(out, rig, device_logs, scene_path.stem)
+    ok, rig, device_logs, started_at = run_live(args, scene_path, out, bin_dir)
+    summary = post_process(out, rig, device_logs, scene_path.stem, started_at)
     summary["ok"] = ok
     summary["wall_s"] = round(time.monotonic() - started, 2)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
