@@ -1,34 +1,425 @@
 #!/usr/bin/env python3
-"""hapfluid launcher: runs a scene with whatever parts of the stack are built.
+"""hapfluid launcher: runs a scene on the live stack, every part a separate process.
 
     hapfluid.py run [--scene NAME|FILE] [--rig FILE] [--duration S] [--build DIR] [--out DIR]
+                    [--windowed] [--no-render] [--shm-prefix P] [--batch]
 
-Every run validates the rig and the scene first, then writes its outputs under
-out/<scene>-<timestamp>/ and prints a short summary. With the simulator built, the scene runs as
-a batch simulation (its scripted hands drive the devices); the live system (fake device, 1 kHz
-loop, simulator and renderer as separate processes) is added on top of this launcher.
+A live run starts, in this order:
+  haptic-fake-device       one per rig device, playing the scene's scripted hand (--motion scene:...)
+  haptic-rt                the 1 kHz loop on the rig's devices (loopback transport); it engages
+                           the devices at zero wrench
+  haptic-trace             drains the loop's trace ring to trace.csv
+  haptic-sim --live        the fluid, simulated time following the wall clock; its wrench fades in
+  haptic-render --live     headless PNG frames (or a window with --windowed)
+runs for --duration seconds (default 10), stops them in reverse dependency order (render, loop,
+trace, sim, devices), checks every exit code and leaves under out/<scene>-<timestamp>/:
+  device_<name>.csv        what the fake device felt (its per-tick log)
+  sim/couplings.csv        the coupling wrench the sim computed (on the hand), sim/bodies.csv, sim/stats.json
+  wrenches.png             fig. 8b-style force/torque plot (both histories)
+  frames/frame_*.png       rendered frames
+  trace.csv, latency.png, latency.json   the 1 kHz loop's trace and latency report
+  summary.json             the printed summary
+The rig is copied with private loopback socket paths and a private shm prefix, so runs never
+collide with each other or with installed services. --batch runs the batch simulator instead.
 """
 import argparse
+import csv
 import datetime
 import json
+import math
+import os
 import pathlib
-import shutil
+import re
+import signal
 import subprocess
 import sys
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
+SCENES = ROOT / "config" / "scenes"
+RIGS = ROOT / "config" / "rigs"
 
 
 def resolve_scene(name: str) -> pathlib.Path:
     path = pathlib.Path(name)
     if path.suffix == ".toml" and path.exists():
         return path.resolve()
-    candidate = ROOT / "config" / "scenes" / f"{name}.toml"
+    candidate = SCENES / f"{name}.toml"
     if candidate.exists():
         return candidate
-    known = ", ".join(sorted(p.stem for p in (ROOT / "config" / "scenes").glob("*.toml")))
+    known = ", ".join(sorted(p.stem for p in SCENES.glob("*.toml")))
     sys.exit(f"hapfluid: no scene named '{name}' (config/scenes/{name}.toml does not exist); known scenes: {known}")
+
+
+def load_toml(path: pathlib.Path) -> dict:
+    import tomllib
+    with path.open("rb") as f:
+        return tomllib.load(f)
+
+
+def scene_device_for(scene: dict, rig_name: str):
+    """The live sim's matching rule (sim_gpu/live/README.md): rig_device = N, else the name N."""
+    devices = scene.get("devices", [])
+    for d in devices:
+        if d.get("source") == "rig" and d.get("rig_device") == rig_name:
+            return d
+    for d in devices:
+        if d.get("name") == rig_name:
+            return d
+    return None
+
+
+def _vec(text: str) -> list[float]:
+    return [float(v) for v in text.strip().strip("[]").split(",")]
+
+
+def _fmt(v) -> str:
+    return "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
+
+
+def device_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: float, offsets: dict | None = None) -> pathlib.Path:
+    """The scene as the fake devices play it:
+      * every scripted motion segment starts delay_s later (lead-in): the hands hold their start
+        poses while the loop engages and the fluid settles (the simulator starts last);
+      * positions in the DEVICE frame: x_device = x_scene - offset for devices in `offsets` (the
+        rig's workspace mapping x_scene = offset + x_device, scale 1, no rotation), so the
+        emulated arm stays inside its mechanical workspace;
+      * mesh paths absolute, so the copy can live anywhere."""
+    offsets = offsets or {}
+    lines, in_motion, has_start, section, device = [], False, False, "", None
+
+    def close_segment():
+        if in_motion and not has_start:
+            lines.append(f"start_s = {delay_s:.6g}")
+    for line in scene_path.read_text().splitlines():
+        stripped = line.split("#")[0].strip()
+        if stripped.startswith("["):
+            section = stripped
+            if stripped == "[[devices]]":
+                device = None
+            if not stripped.startswith("[[devices.motion.keyframes]]"):
+                close_segment()
+                in_motion, has_start = stripped == "[[devices.motion]]", False
+        elif section == "[[devices]]" and re.match(r"name\s*=", stripped):
+            device = stripped.split("=", 1)[1].strip().strip('"')
+        elif in_motion and re.match(r"(start_s|stop_s)\s*=", stripped):
+            key, value = [v.strip() for v in stripped.split("=", 1)]
+            has_start |= key == "start_s"
+            line = f"{key} = {float(value.replace('_', '')) + delay_s:.6g}"
+        elif device in offsets and (
+                (section == "[[devices]]" and re.match(r"start_position_m\s*=", stripped)) or
+                (section == "[[devices.motion.keyframes]]" and re.match(r"position_m\s*=", stripped))):
+            key, value = [v.strip() for v in stripped.split("=", 1)]
+            line = f"{key} = {_fmt([a - b for a, b in zip(_vec(value), offsets[device])])}"
+        line = re.sub(r'mesh\s*=\s*"(\.\./[^"]+)"', lambda m: f'mesh = "{(scene_path.parent / m.group(1)).resolve()}"', line)
+        lines.append(line)
+    close_segment()
+    path = out / "scene_devices.toml"
+    path.write_text(f"# {scene_path.name} for the fake devices: motions {delay_s} s later (lead-in), device frame\n" +
+                    "\n".join(lines) + "\n")
+    return path
+
+
+def default_rig(scene: dict) -> pathlib.Path:
+    return RIGS / ("fake_dual.toml" if len(scene.get("devices", [])) >= 2 else "fake_single.toml")
+
+
+def private_rig_text(text: str, scene: dict, tag: str) -> tuple[str, dict]:
+    """The rig with loopback sockets private to this run (paths < 108 bytes) and, for loopback
+    (emulated) devices with an identity workspace mapping, the mapping centred on the scene hand's
+    start position: the emulated arm starts at the middle of its workspace (its end stops are at
+    +-0.3 m) instead of pressing against an end stop. Returns (text, {device: offset})."""
+    names = []
+
+    def replace(match):
+        names.append(match.group(1))
+        return f'address = "/tmp/hapfluid-{tag}-{len(names)}.sock"'
+    blocks = re.split(r"(?m)^(?=\[\[devices\]\])", text)
+    offsets = {}
+    for i, block in enumerate(blocks):
+        if not block.startswith("[[devices]]") or 'kind = "loopback"' not in block:
+            continue
+        name = re.search(r'(?m)^name\s*=\s*"([^"]+)"', block).group(1)
+        sdev = scene_device_for(scene, name)
+        mapping = re.search(r"(?m)^mapping\s*=.*$", block)
+        identity = mapping is None or re.fullmatch(
+            r"mapping\s*=\s*\{\s*offset_m\s*=\s*\[0(\.0)?,\s*0(\.0)?,\s*0(\.0)?\],\s*scale\s*=\s*1(\.0)?,\s*"
+            r"rotation\s*=\s*\[1(\.0)?,\s*0(\.0)?,\s*0(\.0)?,\s*0(\.0)?\]\s*\}", mapping.group(0).strip())
+        if sdev is None or not identity:
+            continue
+        offset = [float(v) for v in sdev.get("start_position_m", [0.0, 0.0, 0.0])]
+        line = f"mapping = {{ offset_m = {_fmt(offset)}, scale = 1.0, rotation = [1.0, 0.0, 0.0, 0.0] }}"
+        block = block.replace(mapping.group(0), line) if mapping else re.sub(
+            r'(?m)^(name\s*=\s*"[^"]+"\n)', lambda m: m.group(1) + line + "\n", block, count=1)
+        blocks[i] = block
+        offsets[name] = offset
+    text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', replace, "".join(blocks))
+    return text, offsets
+
+
+def private_rig(rig: pathlib.Path, out: pathlib.Path, tag: str, scene: dict) -> tuple[pathlib.Path, dict]:
+    text, offsets = private_rig_text(rig.read_text(), scene, tag)
+    copy = out / "rig.toml"
+    copy.write_text(f"# {rig} with private loopback sockets and scene-centred emulated arms for this run\n" + text)
+    return copy, offsets
+
+
+def try_nice(increment: int):
+    """Lower (or, where permitted, raise) the scheduling priority of the child about to start."""
+    try:
+        os.nice(increment)
+    except PermissionError:
+        pass
+
+
+def can_use_fifo(priority: int) -> bool:
+    """True when this user may run a process under SCHED_FIFO (root, or RLIMIT_RTPRIO granted)."""
+    try:
+        return subprocess.run(["chrt", "-f", str(priority), "true"], capture_output=True).returncode == 0
+    except FileNotFoundError:
+        return False
+
+
+class Stack:
+    """The processes of one live run, started and stopped in order, exit codes checked."""
+
+    def __init__(self, out: pathlib.Path):
+        self.out = out
+        self.procs = []  # (name, Popen, log file)
+        self.started_at = {}
+
+    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0):
+        log = open(self.out / "logs" / f"{name}.log", "w")
+        preexec = (lambda: try_nice(nice)) if nice else None
+        if fifo_priority and can_use_fifo(fifo_priority):
+            args = ["chrt", "-f", str(fifo_priority)] + list(args)
+        p = subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE if stdout_pipe else log,
+                             stderr=log, text=True, preexec_fn=preexec)
+        self.procs.append((name, p, log))
+        self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
+        return p
+
+    def running(self, name):
+        return next(p for n, p, _ in self.procs if n == name)
+
+    def wait_for_file(self, path: pathlib.Path, timeout_s: float, proc=None) -> bool:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if path.exists():
+                return True
+            if proc is not None and proc.poll() is not None:
+                return False
+            time.sleep(0.02)
+        return False
+
+    def early_exits(self):
+        return [(n, p.returncode) for n, p, _ in self.procs if p.poll() is not None]
+
+    def stop(self, name, timeout_s=10.0, grace_s=0.0):
+        for n, p, log in self.procs:
+            if n != name:
+                continue
+            if grace_s > 0:  # a process that ends by itself (--duration) gets the chance to
+                try:
+                    p.wait(timeout=grace_s)
+                except subprocess.TimeoutExpired:
+                    pass
+            if p.poll() is None:
+                p.send_signal(signal.SIGINT)
+                try:
+                    p.wait(timeout=timeout_s)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+                    p.wait()
+                    log.write(f"\nhapfluid: {name} did not stop within {timeout_s} s of SIGINT: killed\n")
+            log.flush()
+            return p.returncode
+        return None
+
+    def stop_all(self, order, grace=None):
+        codes = {}
+        for name in order:
+            if any(n == name for n, _, _ in self.procs):
+                codes[name] = self.stop(name, grace_s=(grace or {}).get(name, 0.0))
+        for n, p, log in self.procs:
+            if n not in codes:
+                codes[n] = self.stop(n)
+            log.close()
+        return codes
+
+
+def read_device_log(path: pathlib.Path):
+    """Rows of the fake device's --log CSV as floats."""
+    with path.open(newline="") as f:
+        return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def sim_start_monotonic_s(couplings: pathlib.Path):
+    """CLOCK_MONOTONIC second at which the live sim's time started (first row: publish_ns - wall_s)."""
+    try:
+        with couplings.open(newline="") as f:
+            row = next(csv.DictReader(f))
+        return float(row["publish_ns"]) * 1e-9 - float(row["wall_s"])
+    except (OSError, StopIteration, KeyError, ValueError):
+        return None
+
+
+def device_wrench_csv(logs: dict, out: pathlib.Path, shift_s: dict | None = None) -> pathlib.Path:
+    """The fake devices' logs as one t,device,fx..tz CSV (force applied on the hand), for plotting.
+    shift_s[name] moves a device's own clock onto the sim's (its start minus the sim's start)."""
+    shift_s = shift_s or {}
+    path = out / "device_wrenches.csv"
+    with path.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["t", "device", "fx", "fy", "fz", "tx", "ty", "tz"])
+        for name, rows in logs.items():
+            for r in rows[::5]:  # 200 Hz is plenty for a plot
+                w.writerow([f"{r['t_s'] + shift_s.get(name, 0.0):.6f}", name, r["applied_fx"], r["applied_fy"], r["applied_fz"],
+                            r["applied_tx"], r["applied_ty"], r["applied_tz"]])
+    return path
+
+
+def run_live(args, scene_path, out, bin_dir):
+    scene = load_toml(scene_path)
+    rig_src = pathlib.Path(args.rig) if args.rig else default_rig(scene)
+    tag = f"{os.getpid()}-{int(time.time()) % 100000}"
+    rig_path, offsets = private_rig(rig_src, out, tag, scene)
+    rig = load_toml(rig_path)
+    prefix = args.shm_prefix or f"hapfluid-run-{tag}"
+    duration = args.duration if args.duration else float(scene.get("duration_s", 10.0))
+    (out / "logs").mkdir(exist_ok=True)
+    (out / "frames").mkdir(exist_ok=True)
+
+    check = subprocess.run([str(bin_dir / "haptic-config"), "check", "--rig", str(rig_path), str(scene_path)],
+                           capture_output=True, text=True)
+    (out / "config-check.txt").write_text(check.stdout + check.stderr)
+    if check.returncode != 0:
+        sys.stderr.write(check.stdout + check.stderr)
+        sys.exit("hapfluid: the configuration has errors (listed above); nothing was run")
+
+    stack = Stack(out)
+    print(f"hapfluid: live run of {scene_path.stem} for {duration:g} s on rig {rig_src.name} "
+          f"(shm prefix {prefix}); logs in {out / 'logs'}", flush=True)
+    ok = True
+    device_logs = {}
+    device_scene_path = device_scene(scene_path, out, args.lead_in, offsets)
+    started = time.monotonic()
+    try:
+        for dev in rig.get("devices", []):
+            name = dev["name"]
+            sdev = scene_device_for(scene, name)
+            motion = f"scene:{device_scene_path}:{sdev['name']}" if sdev else "hold"
+            device_logs[name] = out / f"device_{name}.csv"
+            p = stack.start(f"haptic-fake-device-{name}",
+                            [bin_dir / "haptic-fake-device", "--rig", rig_path, "--device", name, "--motion", motion,
+                             "--log", device_logs[name], "--summary", out / "logs" / f"device_{name}_summary.json"],
+                            stdout_pipe=True, fifo_priority=70)
+            line = p.stdout.readline()  # "haptic-fake-device: ready on ..."
+            if "ready" not in line:
+                raise RuntimeError(f"haptic-fake-device for '{name}' did not start: {line.strip()}")
+        rt = stack.start("haptic-rt", [bin_dir / "haptic-rt", "--rig", rig_path, "--shm-prefix", prefix,
+                                       "--flight-dir", out / "flight"])
+        # The loop engages its devices at zero wrench before the sim's wrench fades in: a loop
+        # started under a sim already pushing beyond the rig's engage_threshold_n would wait.
+        if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.device_states"), 15, rt):
+            raise RuntimeError("haptic-rt did not start (see logs/haptic-rt.log)")
+        time.sleep(0.5)
+        stack.start("haptic-trace", [bin_dir / "haptic-trace", "--out", out / "trace.csv", "--shm-prefix", prefix,
+                                     "--wait", "10"])
+        sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
+                                         "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
+                                         "--threads", str(args.sim_threads)],
+                          nice=-5)  # feeds the haptic loop: ahead of builds and the renderer
+        if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
+            raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
+        if not args.no_render and not (bin_dir / "haptic-render").exists():
+            print("hapfluid: haptic-render is not built: running without the renderer", file=sys.stderr)
+        elif not args.no_render:
+            render = [bin_dir / "haptic-render", "--live", "--scene", scene_path, "--shm-prefix", prefix]
+            render += ["--width", "640", "--height", "480"]
+            render += [] if args.windowed else ["--headless", "--out", out / "frames", "--no-mp4"]
+            # It ends by itself (it has no SIGINT handler to save a last frame cleanly).
+            render += ["--duration", f"{max(1.0, duration - (time.monotonic() - started)):.2f}"]
+            # The renderer (lavapipe: CPU rasterisation) yields the CPU to the loop and the sim.
+            stack.start("haptic-render", render, nice=10)
+        deadline = started + duration
+        while time.monotonic() < deadline:
+            dead = stack.early_exits()
+            if dead:
+                raise RuntimeError("stopped early: " + ", ".join(f"{n} (exit {c})" for n, c in dead))
+            time.sleep(0.1)
+    except RuntimeError as e:
+        ok = False
+        print(f"hapfluid: {e}", file=sys.stderr)
+    codes = stack.stop_all(grace={"haptic-render": 8.0}, order=["haptic-render", "haptic-rt", "haptic-trace", "haptic-sim"] +
+                           [n for n, _, _ in stack.procs if n.startswith("haptic-fake-device")])
+    for name, code in codes.items():
+        if code != 0:
+            ok = False
+            print(f"hapfluid: {name} exited with {code}; its log: {out / 'logs' / (name + '.log')}", file=sys.stderr)
+            sys.stderr.write("".join((out / "logs" / f"{name}.log").read_text().splitlines(True)[-8:]))
+    leftovers = [n for n in os.listdir("/dev/shm") if n.startswith(prefix + ".")]
+    if leftovers:
+        ok = False
+        print(f"hapfluid: shared memory left behind: {leftovers}", file=sys.stderr)
+    return ok, rig, device_logs, stack.started_at
+
+
+def post_process(out, rig, device_logs, scene_name, started=None):
+    started = started or {}
+    py = sys.executable
+    summary = {"scene": scene_name, "out": str(out)}
+    stats_path = out / "sim" / "stats.json"
+    if stats_path.exists():
+        stats = json.loads(stats_path.read_text())
+        summary["sim_steps_per_s"] = round(stats["steps_per_s"], 1)
+        summary["real_time_factor"] = round(stats["real_time_factor"], 3)
+        summary["sim_kept_up"] = stats["kept_up_with_wall_clock"]
+        summary["fluid_particles"] = stats["particles"]["fluid"]
+    logs = {n: read_device_log(p) for n, p in device_logs.items() if p.exists()}
+    if logs:
+        # One time axis: the sim's (wall clock since it started, = simulated time at real-time
+        # factor 1); each device log moved by its start time (launcher's clock, +-10 ms).
+        sim_start = sim_start_monotonic_s(out / "sim" / "couplings.csv")
+        shift = {n: started[f"haptic-fake-device-{n}"] - sim_start for n in logs
+                 if sim_start is not None and f"haptic-fake-device-{n}" in started}
+        dev_csv = device_wrench_csv(logs, out, shift)
+        summary["max_force_on_hand_n"] = {
+            n: round(max((math.hypot(r["applied_fx"], r["applied_fy"], r["applied_fz"]) for r in rows), default=0), 3)
+            for n, rows in logs.items()}
+        plot = subprocess.run([py, str(ROOT / "scripts" / "plot_wrenches.py"), str(out / "sim" / "couplings.csv"),
+                               str(dev_csv), "--out", str(out / "wrenches.png"), "--labels", "sim coupling,device (applied)",
+                               "--title", f"{scene_name}: wrench on the hand"], capture_output=True, text=True)
+        if plot.returncode != 0:
+            print("hapfluid: plot_wrenches failed:\n" + plot.stderr, file=sys.stderr)
+    frames = sorted((out / "frames").glob("frame_*.png"))
+    summary["rendered_frames"] = len(frames)
+    if (out / "trace.csv").exists():
+        rep = subprocess.run([py, str(ROOT / "scripts" / "latency_report.py"), str(out / "trace.csv"),
+                              "--png", str(out / "latency.png"), "--json", str(out / "latency.json")],
+                             capture_output=True, text=True)
+        (out / "latency.txt").write_text(rep.stdout + rep.stderr)
+        if rep.returncode == 0 and (out / "latency.json").exists():
+            lat = json.loads((out / "latency.json").read_text())
+            summary["wake_latency_us"] = lat.get("wake_latency_us", lat)
+        else:
+            print("hapfluid: latency_report failed:\n" + rep.stderr, file=sys.stderr)
+    return summary
+
+
+def print_summary(summary):
+    print("hapfluid: summary")
+    if "sim_steps_per_s" in summary:
+        kept = "kept up with the wall clock" if summary["sim_kept_up"] else "could NOT keep up with the wall clock"
+        print(f"  sim: {summary['sim_steps_per_s']} steps/s, real-time factor {summary['real_time_factor']} "
+              f"({kept}), {summary['fluid_particles']} fluid particles")
+    print(f"  rendered frames: {summary.get('rendered_frames', 0)}")
+    w = summary.get("wake_latency_us")
+    if isinstance(w, dict) and "p99" in w:
+        print(f"  1 kHz loop wake latency: p50 {w.get('p50', 0):.1f} us, p99 {w['p99']:.1f} us, max {w.get('max', 0):.1f} us")
+    for n, f in summary.get("max_force_on_hand_n", {}).items():
+        print(f"  max force on the hand '{n}': {f} N")
+    print(f"  outputs: {summary['out']}")
 
 
 def main():
@@ -36,53 +427,49 @@ def main():
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="run a scene")
     run.add_argument("--scene", default="spoon_stirring")
-    run.add_argument("--rig", default=str(ROOT / "config" / "rigs" / "fake_single.toml"))
+    run.add_argument("--rig", default=None, help="rig file (default: fake_single, fake_dual for two-hand scenes)")
     run.add_argument("--duration", type=float, default=None, help="seconds (default: the scene's duration_s)")
     run.add_argument("--build", default="build")
     run.add_argument("--out", default=None, help="output folder (default: out/<scene>-<timestamp>)")
+    run.add_argument("--windowed", action="store_true", help="render in a window instead of PNG frames")
+    run.add_argument("--no-render", action="store_true", help="run without the renderer")
+    run.add_argument("--shm-prefix", default=None, help="shared-memory prefix (default: private to this run)")
+    run.add_argument("--lead-in", type=float, default=1.5,
+                     help="seconds the fake hands hold still before their script starts (loop engages, fluid settles)")
+    run.add_argument("--sim-threads", type=int, default=max(1, (os.cpu_count() or 2) - 1),
+                     help="simulator threads (default: one core left for the loop and the devices)")
+    run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")
     args = parser.parse_args()
 
-    build = (ROOT / args.build).resolve() if not pathlib.Path(args.build).is_absolute() else pathlib.Path(args.build)
+    build = pathlib.Path(args.build)
+    build = build if build.is_absolute() else (ROOT / build).resolve()
     bin_dir = build / "bin"
-    scene = resolve_scene(args.scene)
+    scene_path = resolve_scene(args.scene)
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out = pathlib.Path(args.out) if args.out else ROOT / "out" / f"{scene.stem}-{stamp}"
+    out = pathlib.Path(args.out).resolve() if args.out else ROOT / "out" / f"{scene_path.stem}-{stamp}"
     out.mkdir(parents=True, exist_ok=True)
-    started = time.monotonic()
+    (out / "scene.toml").write_text(scene_path.read_text())
+    missing = [b for b in ("haptic-sim", "haptic-rt", "haptic-fake-device", "haptic-trace", "haptic-config")
+               if not (bin_dir / b).exists()]
+    if missing:
+        sys.exit(f"hapfluid: not built: {', '.join(missing)} (run `make`)")
 
-    print(f"hapfluid: scene {scene.relative_to(ROOT) if scene.is_relative_to(ROOT) else scene}, rig {args.rig}")
-    check = subprocess.run([str(bin_dir / "haptic-config"), "check", "--rig", args.rig, str(scene)],
-                           capture_output=True, text=True)
-    (out / "config-check.txt").write_text(check.stdout + check.stderr)
-    sys.stdout.write(check.stdout)
-    if check.returncode != 0:
-        sys.stderr.write(check.stderr)
-        sys.exit("hapfluid: the configuration has errors (listed above); nothing was run")
-    shutil.copy(scene, out / "scene.toml")
-
-    summary = {"scene": scene.stem, "out": str(out), "steps": []}
-    sim = bin_dir / "haptic-sim"
-    if sim.exists():
-        command = [str(sim), "--scene", str(scene), "--backend", "cpu", "--out", str(out / "sim")]
+    if args.batch:
+        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", "cpu", "--out", str(out / "sim")]
         if args.duration:
             command += ["--duration", str(args.duration)]
-        print("hapfluid: " + " ".join(command), flush=True)
-        result = subprocess.run(command)
-        summary["steps"].append({"haptic-sim": result.returncode})
-        if result.returncode != 0:
-            sys.exit(f"hapfluid: haptic-sim failed (exit {result.returncode}); see the messages above")
-        stats = out / "sim" / "stats.json"
-        if stats.exists():
-            summary["sim"] = json.loads(stats.read_text())
-    else:
-        print("hapfluid: haptic-sim is not built yet: validated the configuration only")
+        return subprocess.run(command).returncode
 
-    summary["wall_s"] = round(time.monotonic() - started, 3)
+    started = time.monotonic()
+    ok, rig, device_logs, started_at = run_live(args, scene_path, out, bin_dir)
+    summary = post_process(out, rig, device_logs, scene_path.stem, started_at)
+    summary["ok"] = ok
+    summary["wall_s"] = round(time.monotonic() - started, 2)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    print(f"hapfluid: done in {summary['wall_s']} s; outputs in {out}")
-    for path in sorted(out.rglob("*"))[:20]:
-        if path.is_file():
-            print(f"  {path.relative_to(out)}")
+    print_summary(summary)
+    if not ok:
+        print("hapfluid: the run had errors (above)", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -13,6 +13,7 @@
 #ifdef HAPFLUID_WITH_VULKAN
 #include "hapfluid/sim_vulkan/backend.hpp"
 #endif
+#include "live_main.hpp"  // sim_gpu/live: haptic-sim --live
 
 namespace {
 
@@ -46,6 +47,7 @@ bool parse_number(const std::string& flag, const char* text, double& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (hapfluid::sim::wants_live(argc, argv)) return hapfluid::sim::live_main(argc, argv);
   hapfluid::sim::BatchOptions o;
 #ifdef HAPFLUID_WITH_VULKAN
   hapfluid::sim::vulkan::VulkanRunOptions vulkan;

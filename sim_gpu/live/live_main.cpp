@@ -1,0 +1,90 @@
+#include "live_main.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "live_runner.hpp"
+
+namespace hapfluid::sim {
+namespace {
+
+void usage(std::ostream& out) {
+  out << "usage: haptic-sim --live --scene FILE [--rig FILE] [--shm-prefix NAME] [--out DIR] [--duration S]\n"
+         "                  [--threads N] [--backend cpu|auto] [--max-lag S] [--status-every S]\n"
+         "  --live              run as the live simulator: device poses from /<prefix>.device_states\n"
+         "                      (haptic-rt), sim samples to /<prefix>.sim_samples, particle frames to\n"
+         "                      /<prefix>.particles (haptic-render); simulated time follows the wall clock\n"
+         "  --rig FILE          take the shm prefix and group from the rig's [rt.shm]\n"
+         "  --shm-prefix NAME   shared-memory prefix (default: the rig's, else \"hapfluid\")\n"
+         "  --out DIR           write couplings.csv, bodies.csv and stats.json of the live run\n"
+         "  --duration S        stop after S seconds of wall time (default: until SIGINT/SIGTERM)\n"
+         "  --threads N         worker threads (default: all cores)\n"
+         "  --max-lag S         backlog tolerated before the fluid is declared slower than real time (0.1)\n"
+         "  --status-every S    status line interval on stderr (default 5; 0: none)\n"
+         "Rig device N drives the scene device with source = \"rig\" and rig_device = \"N\", else the\n"
+         "scene device named N (sim_gpu/live/README.md).\n";
+}
+
+bool number(const std::string& flag, const char* text, double& out, double lo) {
+  char* end = nullptr;
+  out = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !std::isfinite(out) || out < lo) {
+    std::cerr << "haptic-sim: " << flag << " " << text << ": must be a number >= " << lo << "\n";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool wants_live(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "--live") == 0) return true;
+  return false;
+}
+
+int live_main(int argc, char** argv) {
+  LiveOptions o;
+  o.threads = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--live") continue;
+    if (a == "-h" || a == "--help") return usage(std::cout), 0;
+    if (i + 1 >= argc) {
+      std::cerr << "haptic-sim: " << a << " needs a value\n";
+      return usage(std::cerr), 2;
+    }
+    const char* v = argv[++i];
+    double x = 0;
+    if (a == "--scene") o.scene = v;
+    else if (a == "--rig") o.rig = v;
+    else if (a == "--shm-prefix") o.shm_prefix = v;
+    else if (a == "--out") o.out = v;
+    else if (a == "--backend") o.backend = v;
+    else if (a == "--duration") {
+      if (!number(a, v, o.duration_s, 0)) return 2;
+    } else if (a == "--threads") {
+      if (!number(a, v, x, 1)) return 2;
+      o.threads = static_cast<int>(x);
+    } else if (a == "--max-lag") {
+      if (!number(a, v, o.max_lag_s, 0.001)) return 2;
+    } else if (a == "--status-every") {
+      if (!number(a, v, o.status_every_s, 0)) return 2;
+    } else {
+      std::cerr << "haptic-sim: unknown option " << a << " (live mode)\n";
+      return usage(std::cerr), 2;
+    }
+  }
+  if (o.scene.empty()) {
+    std::cerr << "haptic-sim: --live needs --scene FILE\n";
+    return usage(std::cerr), 2;
+  }
+  return run_live(o, std::cerr);
+}
+
+}  // namespace hapfluid::sim

@@ -1,0 +1,483 @@
+#include "live_runner.hpp"
+
+#include <signal.h>
+#include <time.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+#include "hapfluid/config/errors.hpp"
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/config/scene.hpp"
+#include "hapfluid/rt/sd_notify.hpp"
+#include "hapfluid/shm/channel.hpp"
+#include "hapfluid/sim/cpu_solver.hpp"
+#include "hapfluid/sim/outputs.hpp"
+
+namespace hapfluid::sim {
+namespace {
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) { g_stop.store(true); }
+
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.z); }
+
+void sleep_until_ns(std::uint64_t t) {
+  timespec ts{static_cast<time_t>(t / 1'000'000'000ull), static_cast<long>(t % 1'000'000'000ull)};
+  clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);  // EINTR: the loop re-checks
+}
+
+void put3(const Vec3& v, double out[3]) { out[0] = v.x, out[1] = v.y, out[2] = v.z; }
+void put4(const Quat& q, double out[4]) { out[0] = q.w, out[1] = q.x, out[2] = q.y, out[3] = q.z; }
+
+// The scene device a rig device drives (the rule in live_runner.hpp), or -1.
+int match_scene_device(const config::Scene& scene, const SimulationModel& model, const std::string& rig_name) {
+  for (std::size_t d = 0; d < model.devices.size(); ++d) {
+    const config::SceneDevice* sd = scene.find_device(model.devices[d].name);
+    if (sd && sd->source == config::DeviceSource::rig && sd->rig_device == rig_name) return static_cast<int>(d);
+  }
+  for (std::size_t d = 0; d < model.devices.size(); ++d)
+    if (model.devices[d].name == rig_name) return static_cast<int>(d);
+  return -1;
+}
+
+DeviceState from_entry(const shm::DeviceStateEntry& e) {
+  DeviceState s;
+  s.position = {e.position_m[0], e.position_m[1], e.position_m[2]};
+  s.orientation = normalized(Quat{e.orientation[0], e.orientation[1], e.orientation[2], e.orientation[3]});
+  s.linear_velocity = {e.linear_velocity_m_s[0], e.linear_velocity_m_s[1], e.linear_velocity_m_s[2]};
+  s.angular_velocity = {e.angular_velocity_rad_s[0], e.angular_velocity_rad_s[1], e.angular_velocity_rad_s[2]};
+  return s;
+}
+
+bool finite_entry(const shm::DeviceStateEntry& e) {
+  for (double v : e.position_m) if (!std::isfinite(v)) return false;
+  for (double v : e.orientation) if (!std::isfinite(v)) return false;
+  for (double v : e.linear_velocity_m_s) if (!std::isfinite(v)) return false;
+  for (double v : e.angular_velocity_rad_s) if (!std::isfinite(v)) return false;
+  const double n = e.orientation[0] * e.orientation[0] + e.orientation[1] * e.orientation[1] +
+                   e.orientation[2] * e.orientation[2] + e.orientation[3] * e.orientation[3];
+  return n > 0.25 && n < 4;
+}
+
+// The device_states channel as the live sim reads it: attach when haptic-rt appears, follow its
+// restarts, forget it when it stops. Calls that do syscalls run at most every 0.25 s.
+class DeviceInput {
+ public:
+  explicit DeviceInput(std::string name) : name_(std::move(name)) {}
+
+  // Returns the newest record when it is newer than the last one returned.
+  const shm::DeviceStatesRecord* poll(std::uint64_t now, std::ostream& log) {
+    if (now >= next_check_ns_) {
+      next_check_ns_ = now + 250'000'000ull;
+      if (reader_.valid()) {
+        const shm::WriterStatus s = reader_.check_liveness(now, 500'000'000ull);
+        if (s != shm::WriterStatus::live) {
+          log << "haptic-sim: device states " << shm::to_string(s) << " (haptic-rt stopped?): devices hold their last pose\n";
+          reader_ = shm::LatestReader();
+          live_ = false;
+        }
+      }
+      if (!reader_.valid()) {
+        try {
+          reader_ = shm::LatestReader::attach(name_, shm::ChannelKind::device_states, sizeof(shm::DeviceStatesRecord));
+          log << "haptic-sim: attached to " << name_ << " (haptic-rt pid " << reader_.segment().header().writer_pid << ")\n";
+          last_generation_ = 0;
+        } catch (const shm::ShmError& e) {
+          if (!attach_error_said_) log << "haptic-sim: waiting for haptic-rt: " << e.what() << "\n";
+          attach_error_said_ = true;
+        }
+      }
+    }
+    if (!reader_.valid()) return nullptr;
+    std::uint64_t generation = 0;
+    if (reader_.try_read(record_, &generation) != shm::ReadResult::ok || generation == last_generation_) return nullptr;
+    last_generation_ = generation;
+    live_ = true;
+    return &record_;
+  }
+  bool live() const { return live_; }
+
+ private:
+  std::string name_;
+  shm::LatestReader reader_;
+  shm::DeviceStatesRecord record_{};
+  std::uint64_t last_generation_ = 0, next_check_ns_ = 0;
+  bool attach_error_said_ = false, live_ = false;
+};
+
+struct Counters {
+  std::uint64_t samples = 0, particle_frames = 0, device_records = 0, lag_events = 0;
+  double dropped_backlog_s = 0, dt_min = 1e300, dt_max = 0, step_wall_max_s = 0;
+};
+
+std::string stats_json(const LiveOptions& o, const CpuSolver& solver, const Counters& c, double wall_s,
+                       const std::vector<std::string>& device_map, bool complete, const std::string& error) {
+  const SimulationModel& m = solver.model();
+  const double steps = static_cast<double>(solver.steps());
+  const double wall = std::max(wall_s, 1e-9);
+  std::ostringstream j;
+  j << "{\n  \"mode\": \"live\",\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
+  if (!error.empty()) j << "  \"error\": \"" << json_escape(error) << "\",\n";
+  j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
+    << "  \"backend\": \"" << o.backend << "\",\n  \"threads\": " << solver.threads() << ",\n"
+    << "  \"particles\": {\"fluid\": " << m.fluid.size() << ", \"boundary\": " << m.wall_particle_count
+    << ", \"static_body\": " << m.static_body_particle_count << ", \"body\": " << m.body_particles.size() << "},\n"
+    << "  \"steps\": " << solver.steps() << ",\n"
+    << "  \"dt_s\": {\"min\": " << num(c.dt_min < 1e300 ? c.dt_min : 0) << ", \"max\": " << num(c.dt_max)
+    << ", \"mean\": " << num(steps > 0 ? solver.time_s() / steps : 0) << "},\n"
+    << "  \"simulated_time_s\": " << num(solver.time_s()) << ",\n  \"wall_time_s\": " << num(wall_s) << ",\n"
+    << "  \"steps_per_s\": " << num(steps / wall) << ",\n"
+    << "  \"real_time_factor\": " << num(solver.time_s() / wall) << ",\n"
+    << "  \"kept_up_with_wall_clock\": " << (c.lag_events == 0 ? "true" : "false") << ",\n"
+    << "  \"dropped_backlog_s\": " << num(c.dropped_backlog_s) << ",\n"
+    << "  \"longest_step_wall_s\": " << num(c.step_wall_max_s) << ",\n"
+    << "  \"sim_samples_published\": " << c.samples << ",\n"
+    << "  \"particle_frames_published\": " << c.particle_frames << ",\n"
+    << "  \"device_records_read\": " << c.device_records << ",\n  \"device_matches\": [";
+  for (std::size_t i = 0; i < device_map.size(); ++i) j << (i ? ", " : "") << "\"" << json_escape(device_map[i]) << "\"";
+  j << "]\n}\n";
+  return j.str();
+}
+
+}  // namespace
+
+int run_live(const LiveOptions& o, std::ostream& log) {
+  if (o.backend != "cpu" && o.backend != "auto") {
+    log << "haptic-sim: --backend " << o.backend << ": the live mode of this build has the cpu backend only\n";
+    return 2;
+  }
+  if (o.backend == "auto") log << "haptic-sim: --backend auto: the live mode runs the cpu backend (no Vulkan live path yet)\n";
+  if (o.threads < 1 || o.threads > 256) {
+    log << "haptic-sim: --threads " << o.threads << ": must be 1..256\n";
+    return 2;
+  }
+  std::string prefix = o.shm_prefix, group;
+  config::Scene scene;
+  try {
+    if (!o.rig.empty()) {
+      const config::Rig rig = config::load_rig(o.rig);
+      if (prefix.empty()) prefix = rig.rt.shm.prefix;
+      group = rig.rt.shm.group;
+    }
+    scene = config::load_scene(o.scene);
+  } catch (const config::ConfigError& e) {
+    log << "haptic-sim: invalid configuration:\n";
+    for (const auto& p : e.problems()) log << "  " << p.to_string() << "\n";
+    return 2;
+  }
+  if (prefix.empty()) prefix = "hapfluid";
+
+  std::unique_ptr<CpuSolver> solver;
+  try {
+    solver = std::make_unique<CpuSolver>(build_model(scene), o.threads);
+  } catch (const std::exception& e) {
+    log << "haptic-sim: " << e.what() << "\n";
+    return 2;
+  }
+  const SimulationModel& m = solver->model();
+  const std::size_t fluid_count = m.fluid.size();
+  if (m.bodies.size() > std::size_t(shm::kMaxBodies))
+    log << "haptic-sim: note: the scene has " << m.bodies.size() << " bodies; sim_samples and particle frames carry the first "
+        << shm::kMaxBodies << "\n";
+
+  shm::WriterOptions wo;
+  wo.group = group;
+  shm::LatestWriter samples_writer, particles_writer;
+  try {
+    samples_writer = shm::LatestWriter::create(shm::segment_name(prefix, shm::ChannelKind::sim_samples),
+                                               shm::ChannelKind::sim_samples, sizeof(shm::SimSample), 4, wo);
+    particles_writer = shm::LatestWriter::create(shm::segment_name(prefix, shm::ChannelKind::particles),
+                                                 shm::ChannelKind::particles,
+                                                 shm::particle_frame_bytes(static_cast<std::uint32_t>(fluid_count)), 3, wo);
+  } catch (const shm::ShmError& e) {
+    log << "haptic-sim: " << e.what() << "\n";
+    return 2;
+  }
+
+  struct sigaction action {};
+  action.sa_handler = on_signal;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+
+  std::optional<CsvFile> couplings_csv, bodies_csv;
+  try {
+    if (!o.out.empty()) {
+      std::filesystem::create_directories(o.out);
+      std::filesystem::remove(o.out / "stats.json");  // never mistaken for this run's until it ends
+      couplings_csv.emplace(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick,publish_ns");
+      bodies_csv.emplace(o.out / "bodies.csv", "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz");
+    }
+  } catch (const std::exception& e) {
+    log << "haptic-sim: --out " << o.out.string() << ": " << e.what() << "\n";
+    return 2;
+  }
+
+  log << "haptic-sim: live: scene \"" << m.scene_name << "\", " << fluid_count << " fluid particles, " << m.bodies.size()
+      << " bodies, " << m.devices.size() << " scene devices, " << solver->threads() << " threads; shm /" << prefix
+      << ".{sim_samples,particles} (reads /" << prefix << ".device_states)\n";
+
+  // Buffers reused every step: nothing below allocates per step except the CSV rows.
+  auto sample = std::make_unique<shm::SimSample>();
+  std::vector<std::byte> frame(shm::particle_frame_bytes(static_cast<std::uint32_t>(fluid_count)));
+  std::vector<int> live_device_of_scene(m.devices.size(), -1);  // device_states index driving each scene device
+  std::vector<int> scene_device_of_entry(shm::kMaxDevices, -1);
+  std::vector<std::string> device_map(shm::kMaxDevices);
+  std::vector<bool> unmatched_said(shm::kMaxDevices, false);
+  std::vector<DeviceState> held(m.devices.size());
+  for (std::size_t d = 0; d < m.devices.size(); ++d) held[d] = device_state_from(config::evaluate_motion(m.devices[d].motion, 0));
+  shm::DeviceStatesRecord devices{};
+  bool have_devices = false;
+  DeviceInput input(shm::segment_name(prefix, shm::ChannelKind::device_states));
+
+  rt::SdNotifier notifier;
+  notifier.send("READY=1");
+  const std::uint64_t watchdog_ns = notifier.watchdog_ping_interval_ns();
+
+  Counters c;
+  const std::uint64_t start_ns = shm::monotonic_ns();
+  std::uint64_t origin_ns = start_ns;  // wall time of simulated time 0 (moves when the backlog is dropped)
+  const double frame_period = 1.0 / m.params.frame_rate_hz;
+  double next_frame_s = 0, next_body_row_s = 0;
+  std::uint64_t next_status_ns = start_ns + static_cast<std::uint64_t>(o.status_every_s * 1e9);
+  std::uint64_t next_watchdog_ns = start_ns, status_steps = 0;
+  double status_sim_s = 0;
+  std::uint64_t status_wall_ns = start_ns;
+  std::string error;
+
+  auto publish_particles = [&](std::uint64_t now) {
+    shm::ParticleFrameHeader h{};
+    h.sequence = solver->steps();
+    h.sim_time_s = solver->time_s();
+    h.publish_ns = now;
+    h.particle_count = static_cast<std::uint32_t>(fluid_count);
+    h.max_particles = static_cast<std::uint32_t>(fluid_count);
+    h.body_count = static_cast<std::uint32_t>(std::min<std::size_t>(m.bodies.size(), shm::kMaxBodies));
+    h.particle_radius_m = 0.5f * m.params.particle_spacing_m;
+    for (std::uint32_t b = 0; b < h.body_count; ++b) {
+      const config::Pose p = m.bodies[b].mesh_pose();
+      h.bodies[b].position_m[0] = p.position_m.x, h.bodies[b].position_m[1] = p.position_m.y;
+      h.bodies[b].position_m[2] = p.position_m.z;
+      h.bodies[b].orientation[0] = p.orientation.w, h.bodies[b].orientation[1] = p.orientation.x;
+      h.bodies[b].orientation[2] = p.orientation.y, h.bodies[b].orientation[3] = p.orientation.z;
+    }
+    std::memcpy(frame.data(), &h, sizeof h);
+    auto* records = reinterpret_cast<shm::ParticleRecord*>(frame.data() + sizeof h);
+    const FluidParticles& f = m.fluid;
+    for (std::size_t i = 0; i < fluid_count; ++i) {
+      records[i].position_m[0] = f.x[i], records[i].position_m[1] = f.y[i], records[i].position_m[2] = f.z[i];
+      records[i].scalar = std::sqrt(f.vx[i] * f.vx[i] + f.vy[i] * f.vy[i] + f.vz[i] * f.vz[i]);
+    }
+    particles_writer.publish(frame.data(), frame.size());
+    ++c.particle_frames;
+  };
+
+  try {
+    publish_particles(start_ns);
+    while (!g_stop.load()) {
+      std::uint64_t now = shm::monotonic_ns();
+      if (o.duration_s > 0 && now - start_ns >= static_cast<std::uint64_t>(o.duration_s * 1e9)) break;
+      if (watchdog_ns && now >= next_watchdog_ns) {
+        notifier.send("WATCHDOG=1");
+        next_watchdog_ns = now + watchdog_ns;
+      }
+      // Follow the wall clock: step once the wall has reached the simulated time.
+      const std::uint64_t sim_wall_ns = origin_ns + static_cast<std::uint64_t>(solver->time_s() * 1e9);
+      if (now < sim_wall_ns) {
+        samples_writer.heartbeat();
+        sleep_until_ns(std::min<std::uint64_t>(sim_wall_ns, now + 20'000'000ull));
+        continue;
+      }
+      const double lag_s = double(now - sim_wall_ns) * 1e-9;
+      if (lag_s > o.max_lag_s) {
+        // Cannot keep up: drop the backlog rather than pretend (the fluid runs slower than real time).
+        if (c.lag_events == 0) {
+          const double wall = std::max(double(now - start_ns) * 1e-9, 1e-9);
+          char line[256];
+          std::snprintf(line, sizeof line,
+                        "haptic-sim: WARNING cannot keep up with the wall clock (%.0f ms behind at t = %.2f s, "
+                        "%.0f steps/s): the fluid runs SLOWER than real time; real-time factor so far %.2f, "
+                        "reported in status lines and stats.json\n",
+                        lag_s * 1e3, solver->time_s(), double(solver->steps()) / wall, solver->time_s() / wall);
+          log << line << std::flush;
+        }
+        ++c.lag_events;
+        c.dropped_backlog_s += lag_s;
+        origin_ns = now - static_cast<std::uint64_t>(solver->time_s() * 1e9);
+      }
+
+      // Device poses: the newest device_states record, matched by name (live_runner.hpp).
+      if (const shm::DeviceStatesRecord* r = input.poll(now, log)) {
+        devices = *r;
+        have_devices = true;
+        ++c.device_records;
+        std::fill(live_device_of_scene.begin(), live_device_of_scene.end(), -1);
+        const std::uint32_t n = std::min<std::uint32_t>(devices.device_count, shm::kMaxDevices);
+        for (std::uint32_t i = 0; i < std::uint32_t(shm::kMaxDevices); ++i) {
+          scene_device_of_entry[i] = -1;
+          if (i >= n || !devices.devices[i].present) continue;
+          const std::string name(devices.devices[i].name, strnlen(devices.devices[i].name, shm::kDeviceNameBytes));
+          const int d = match_scene_device(scene, m, name);
+          scene_device_of_entry[i] = d;
+          if (d >= 0 && live_device_of_scene[d] < 0) live_device_of_scene[d] = static_cast<int>(i);
+          const std::string mapping = d >= 0 ? name + " -> " + m.devices[d].name : name + " -> (none)";
+          if (device_map[i] != mapping) {
+            device_map[i] = mapping;
+            if (d >= 0) log << "haptic-sim: rig device \"" << name << "\" drives scene device \"" << m.devices[d].name << "\"\n";
+            else if (!unmatched_said[i])
+              log << "haptic-sim: rig device \"" << name
+                  << "\" drives no scene device (no scene device has rig_device = \"" << name
+                  << "\" or that name): it feels no fluid\n";
+            unmatched_said[i] = d < 0;
+          }
+        }
+      }
+      for (std::size_t d = 0; d < m.devices.size(); ++d) {
+        const int i = live_device_of_scene[d];
+        if (i >= 0 && input.live() && finite_entry(devices.devices[i])) {
+          held[d] = from_entry(devices.devices[i]);
+        } else if (i >= 0) {
+          held[d].linear_velocity = {}, held[d].angular_velocity = {};  // no fresh pose: hold still
+        } else {
+          const config::SceneDevice* sd = scene.find_device(m.devices[d].name);
+          if (sd && sd->source == config::DeviceSource::scripted)
+            held[d] = device_state_from(config::evaluate_motion(m.devices[d].motion, solver->time_s()));
+        }
+        solver->set_device_state(d, held[d]);
+      }
+
+      const double dt = solver->stable_time_step();
+      const std::uint64_t step_start = shm::monotonic_ns();
+      solver->step(dt);
+      now = shm::monotonic_ns();
+      c.step_wall_max_s = std::max(c.step_wall_max_s, double(now - step_start) * 1e-9);
+      c.dt_min = std::min(c.dt_min, dt), c.dt_max = std::max(c.dt_max, dt);
+
+      // sim_samples: bodies and one coupling model per device_states entry (eq. of layouts.hpp).
+      shm::SimSample& s = *sample;
+      s.sequence = solver->steps();
+      s.sim_time_s = solver->time_s();
+      s.device_tick = have_devices ? devices.tick : 0;
+      s.body_count = static_cast<std::uint32_t>(std::min<std::size_t>(m.bodies.size(), shm::kMaxBodies));
+      for (std::uint32_t b = 0; b < s.body_count; ++b) {
+        const RigidBody& body = m.bodies[b];
+        const config::Pose p = body.mesh_pose();
+        s.bodies[b].position_m[0] = p.position_m.x, s.bodies[b].position_m[1] = p.position_m.y;
+        s.bodies[b].position_m[2] = p.position_m.z;
+        s.bodies[b].orientation[0] = p.orientation.w, s.bodies[b].orientation[1] = p.orientation.x;
+        s.bodies[b].orientation[2] = p.orientation.y, s.bodies[b].orientation[3] = p.orientation.z;
+        put3(body.linear_velocity, s.bodies[b].linear_velocity_m_s);
+        put3(body.angular_velocity, s.bodies[b].angular_velocity_rad_s);
+      }
+      s.device_count = have_devices ? std::min<std::uint32_t>(devices.device_count, shm::kMaxDevices) : 0;
+      for (std::uint32_t i = 0; i < std::uint32_t(shm::kMaxDevices); ++i) {
+        shm::CouplingModel& cm = s.couplings[i];
+        cm = {};
+        const int d = i < s.device_count ? scene_device_of_entry[i] : -1;
+        if (d < 0 || !input.live()) continue;
+        const DeviceState& x0 = solver->device_states()[d];
+        put3(x0.position, cm.x0_m);
+        put4(x0.orientation, cm.q0);
+        put3(x0.linear_velocity, cm.v0_m_s);
+        put3(x0.angular_velocity, cm.w0_rad_s);
+        Vec3 f, t;
+        for (const VirtualCoupling& vc : m.couplings) {
+          if (vc.device != std::size_t(d)) continue;
+          // The coupling's spring-damper is the local model of the hand's wrench (§4.4): on the
+          // hand it is -K (x - x_grasp) + D (v_grasp - v), hence F = F0 - K (x - x0) + D (v0 - v).
+          f = f + vc.device_force, t = t + vc.device_torque;
+          cm.stiffness_n_per_m += vc.linear_stiffness_n_per_m;
+          cm.damping_n_s_per_m += vc.linear_damping_n_s_per_m;
+          cm.angular_stiffness_nm_per_rad += vc.angular_stiffness_nm_per_rad;
+          cm.angular_damping_nm_s_per_rad += vc.angular_damping_nm_s_per_rad;
+          cm.valid = 1;
+        }
+        put3(f, cm.force_n);
+        put3(t, cm.torque_nm);
+      }
+      s.publish_ns = shm::monotonic_ns();
+      samples_writer.publish(s);
+      ++c.samples;
+
+      if (couplings_csv) {
+        const std::string tail = "," + num(double(s.publish_ns - start_ns) * 1e-9) + "," + std::to_string(s.device_tick) +
+                                 "," + std::to_string(s.publish_ns);
+        for (const VirtualCoupling& vc : m.couplings)
+          couplings_csv->row(num(solver->time_s()) + "," + m.devices[vc.device].name + "," + m.bodies[vc.body].name + "," +
+                             vec(vc.device_force) + "," + vec(vc.device_torque) + tail);
+      }
+      if (solver->time_s() + 1e-9 >= next_frame_s) {
+        solver->check_finite();  // once per frame: a diverged fluid stops the run, named
+        publish_particles(shm::monotonic_ns());
+        next_frame_s += frame_period;
+        if (next_frame_s < solver->time_s()) next_frame_s = solver->time_s() + frame_period;
+      }
+      if (bodies_csv && solver->time_s() + 1e-9 >= next_body_row_s) {
+        next_body_row_s = solver->time_s() + frame_period;
+        for (const RigidBody& b : m.bodies) {
+          const config::Pose pose = b.mesh_pose();
+          bodies_csv->row(num(solver->time_s()) + "," + b.name + "," + num(pose.position_m.x) + "," + num(pose.position_m.y) +
+                          "," + num(pose.position_m.z) + "," + num(pose.orientation.w) + "," + num(pose.orientation.x) + "," +
+                          num(pose.orientation.y) + "," + num(pose.orientation.z) + "," + vec(b.linear_velocity) + "," +
+                          vec(b.angular_velocity) + "," + vec(b.fluid_force) + "," + vec(b.fluid_torque));
+        }
+      }
+      if (o.status_every_s > 0 && now >= next_status_ns) {
+        const double window = std::max(double(now - status_wall_ns) * 1e-9, 1e-9);
+        char line[200];
+        std::snprintf(line, sizeof line,
+                      "haptic-sim: t = %.2f s, %.0f steps/s, real-time factor %.2f, %llu samples, %llu frames%s\n",
+                      solver->time_s(), double(solver->steps() - status_steps) / window,
+                      (solver->time_s() - status_sim_s) / window, (unsigned long long)c.samples,
+                      (unsigned long long)c.particle_frames, input.live() ? "" : ", no haptic-rt");
+        log << line << std::flush;
+        if (notifier.active()) notifier.send(std::string("STATUS=") + line);
+        status_steps = solver->steps(), status_sim_s = solver->time_s(), status_wall_ns = now;
+        next_status_ns = now + static_cast<std::uint64_t>(o.status_every_s * 1e9);
+      }
+    }
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  notifier.send("STOPPING=1");
+  const double wall_s = double(shm::monotonic_ns() - start_ns) * 1e-9;
+  // Readers see `closed` and the names disappear (a crashed sim's segments are replaced by the next start).
+  samples_writer.close();
+  particles_writer.close();
+  std::vector<std::string> matches;
+  for (const auto& s : device_map)
+    if (!s.empty()) matches.push_back(s);
+  if (!o.out.empty()) {
+    if (error.empty()) {
+      if (couplings_csv) couplings_csv->finish();
+      if (bodies_csv) bodies_csv->finish();
+    }
+    write_text_atomically(o.out / "stats.json", stats_json(o, *solver, c, wall_s, matches, error.empty(), error));
+  }
+  char line[300];
+  std::snprintf(line, sizeof line,
+                "haptic-sim: live run %s: %llu steps in %.2f s (%.0f steps/s), %.2f s simulated, real-time factor %.3f%s\n",
+                error.empty() ? "stopped" : "FAILED", (unsigned long long)solver->steps(), wall_s,
+                double(solver->steps()) / std::max(wall_s, 1e-9), solver->time_s(), solver->time_s() / std::max(wall_s, 1e-9),
+                c.lag_events ? " (could NOT keep up with the wall clock)" : "");
+  log << line;
+  if (!error.empty()) {
+    log << "haptic-sim: error: " << error << "\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace hapfluid::sim
