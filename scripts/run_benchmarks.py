@@ -5,7 +5,7 @@ Benchmarks are executables in BUILD/bench/ (run as `NAME --out OUT/NAME.json`) a
 scripts/bench_*.py (run as `bench_X.py --build BUILD --out OUT/X.json`). Each writes a JSON list of
 {"bench": NAME, "params": {...}, "metrics": {...}} records, units in the metric names.
 
-    scripts/run_benchmarks.py [--build build] [--out out/bench] [--only SUBSTRING] [--quick]
+    scripts/run_benchmarks.py [--build build] [--out out/bench] [--only SUBSTRING]
 """
 import argparse
 import json
@@ -51,7 +51,6 @@ def main():
     parser.add_argument("--build", default="build")
     parser.add_argument("--out", default="out/bench")
     parser.add_argument("--only", default="", help="run only benchmarks whose name contains this")
-    parser.add_argument("--quick", action="store_true", help="pass --quick to every benchmark (smaller sweeps)")
     args = parser.parse_args()
     build, out = pathlib.Path(args.build).resolve(), pathlib.Path(args.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
@@ -63,7 +62,7 @@ def main():
     failed, all_records = [], []
     for index, (name, command) in enumerate(benches, 1):
         target = out / f"{name}.json"
-        command = command + ["--out", str(target)] + (["--quick"] if args.quick else [])
+        command = command + ["--out", str(target)]
         print(f"[{index}/{len(benches)}] {name} ...", flush=True)
         started = time.monotonic()
         result = subprocess.run(command, cwd=ROOT)
