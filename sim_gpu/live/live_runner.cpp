@@ -27,12 +27,7 @@ namespace {
 std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop.store(true); }
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
-std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.z); }
+std::string num(double v) { return csv_number(v); }
 
 void sleep_until_ns(std::uint64_t t) {
   timespec ts{static_cast<time_t>(t / 1'000'000'000ull), static_cast<long>(t % 1'000'000'000ull)};
@@ -218,7 +213,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       std::filesystem::create_directories(o.out);
       std::filesystem::remove(o.out / "stats.json");  // never mistaken for this run's until it ends
       couplings_csv.emplace(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick,publish_ns");
-      bodies_csv.emplace(o.out / "bodies.csv", "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz");
+      bodies_csv.emplace(o.out / "bodies.csv", kBodiesCsvHeader);
     }
   } catch (const std::exception& e) {
     log << "haptic-sim: --out " << o.out.string() << ": " << e.what() << "\n";
@@ -415,8 +410,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         const std::string tail = "," + num(double(s.publish_ns - start_ns) * 1e-9) + "," + std::to_string(s.device_tick) +
                                  "," + std::to_string(s.publish_ns);
         for (const VirtualCoupling& vc : m.couplings)
-          couplings_csv->row(num(solver->time_s()) + "," + m.devices[vc.device].name + "," + m.bodies[vc.body].name + "," +
-                             vec(vc.device_force) + "," + vec(vc.device_torque) + tail);
+          couplings_csv->row(coupling_row(m, vc, solver->time_s()) + tail);
       }
       if (solver->time_s() + 1e-9 >= next_frame_s) {
         solver->check_finite();  // once per frame: a diverged fluid stops the run, named
@@ -426,13 +420,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       }
       if (bodies_csv && solver->time_s() + 1e-9 >= next_body_row_s) {
         next_body_row_s = solver->time_s() + frame_period;
-        for (const RigidBody& b : m.bodies) {
-          const config::Pose pose = b.mesh_pose();
-          bodies_csv->row(num(solver->time_s()) + "," + b.name + "," + num(pose.position_m.x) + "," + num(pose.position_m.y) +
-                          "," + num(pose.position_m.z) + "," + num(pose.orientation.w) + "," + num(pose.orientation.x) + "," +
-                          num(pose.orientation.y) + "," + num(pose.orientation.z) + "," + vec(b.linear_velocity) + "," +
-                          vec(b.angular_velocity) + "," + vec(b.fluid_force) + "," + vec(b.fluid_torque));
-        }
+        for (const RigidBody& b : m.bodies) bodies_csv->row(body_row(b, solver->time_s()));
       }
       if (o.status_every_s > 0 && now >= next_status_ns) {
         const double window = std::max(double(now - status_wall_ns) * 1e-9, 1e-9);

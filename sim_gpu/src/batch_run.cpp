@@ -14,11 +14,7 @@
 namespace hapfluid::sim {
 namespace {
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
+std::string num(double v) { return csv_number(v); }
 
 std::string stats_json(const CpuSolver& solver, const BatchOptions& o, const BatchResult& r, double dt_min, double dt_max,
                        bool complete, const std::string& error) {
@@ -55,7 +51,6 @@ std::string stats_json(const CpuSolver& solver, const BatchOptions& o, const Bat
   return j.str();
 }
 
-std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.z); }
 
 }  // namespace
 
@@ -79,8 +74,8 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
 
   CpuSolver solver(build_model(scene), o.threads);
   const SimulationModel& m = solver.model();
-  CsvFile bodies_csv(o.out / "bodies.csv", "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz");
-  CsvFile couplings_csv(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz");
+  CsvFile bodies_csv(o.out / "bodies.csv", kBodiesCsvHeader);
+  CsvFile couplings_csv(o.out / "couplings.csv", kCouplingsCsvHeader);
 
   BatchResult r;
   double dt_min = 1e300, dt_max = 0;
@@ -94,16 +89,8 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
       solver.set_device_state(d, device_state_from(config::evaluate_motion(m.devices[d].motion, t)));
   };
   auto record = [&](double t) {
-    for (const RigidBody& b : m.bodies) {
-      const config::Pose pose = b.mesh_pose();
-      bodies_csv.row(num(t) + "," + b.name + "," + num(pose.position_m.x) + "," + num(pose.position_m.y) + "," +
-                     num(pose.position_m.z) + "," + num(pose.orientation.w) + "," + num(pose.orientation.x) + "," +
-                     num(pose.orientation.y) + "," + num(pose.orientation.z) + "," + vec(b.linear_velocity) + "," +
-                     vec(b.angular_velocity) + "," + vec(b.fluid_force) + "," + vec(b.fluid_torque));
-    }
-    for (const VirtualCoupling& c : m.couplings)
-      couplings_csv.row(num(t) + "," + m.devices[c.device].name + "," + m.bodies[c.body].name + "," + vec(c.device_force) +
-                        "," + vec(c.device_torque));
+    for (const RigidBody& b : m.bodies) bodies_csv.row(body_row(b, t));
+    for (const VirtualCoupling& c : m.couplings) couplings_csv.row(coupling_row(m, c, t));
   };
   auto export_frame = [&](double t) {
     if (o.export_every_s <= 0 || t + 1e-9 < next_export) return;

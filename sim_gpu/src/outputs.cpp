@@ -116,6 +116,27 @@ void CsvFile::finish() {
   std::filesystem::rename(part_, file_);
 }
 
+std::string csv_number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string csv_vec3(const Vec3& v) { return csv_number(v.x) + "," + csv_number(v.y) + "," + csv_number(v.z); }
+
+std::string body_row(const RigidBody& b, double t) {
+  const config::Pose pose = b.mesh_pose();
+  return csv_number(t) + "," + b.name + "," + csv_number(pose.position_m.x) + "," + csv_number(pose.position_m.y) + "," +
+         csv_number(pose.position_m.z) + "," + csv_number(pose.orientation.w) + "," + csv_number(pose.orientation.x) + "," +
+         csv_number(pose.orientation.y) + "," + csv_number(pose.orientation.z) + "," + csv_vec3(b.linear_velocity) + "," +
+         csv_vec3(b.angular_velocity) + "," + csv_vec3(b.fluid_force) + "," + csv_vec3(b.fluid_torque);
+}
+
+std::string coupling_row(const SimulationModel& m, const VirtualCoupling& c, double t) {
+  return csv_number(t) + "," + m.devices[c.device].name + "," + m.bodies[c.body].name + "," + csv_vec3(c.device_force) +
+         "," + csv_vec3(c.device_torque);
+}
+
 std::string json_escape(const std::string& text) {
   std::string out;
   for (char c : text) {

@@ -12,12 +12,7 @@
 namespace hapfluid::sim::vulkan {
 namespace {
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
-std::string vec(const Vec3& v) { return num(v.x) + "," + num(v.y) + "," + num(v.z); }
+std::string num(double v) { return csv_number(v); }
 
 // stats.json of the cpu backend's batch run (same keys), plus the device, the GPU's per-pass
 // split and the validation counts.
@@ -80,8 +75,8 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
 
   std::filesystem::create_directories(o.out / "particles");
   std::filesystem::remove(o.out / "stats.json");
-  CsvFile bodies_csv(o.out / "bodies.csv", "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz");
-  CsvFile couplings_csv(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz");
+  CsvFile bodies_csv(o.out / "bodies.csv", kBodiesCsvHeader);
+  CsvFile couplings_csv(o.out / "couplings.csv", kCouplingsCsvHeader);
 
   BatchResult r;
   double dt_min = 1e300, dt_max = 0;
@@ -96,16 +91,8 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
       solver.set_device_state(d, device_state_from(config::evaluate_motion(m.devices[d].motion, t)));
   };
   auto record = [&](double t) {
-    for (const RigidBody& b : m.bodies) {
-      const config::Pose pose = b.mesh_pose();
-      bodies_csv.row(num(t) + "," + b.name + "," + num(pose.position_m.x) + "," + num(pose.position_m.y) + "," +
-                     num(pose.position_m.z) + "," + num(pose.orientation.w) + "," + num(pose.orientation.x) + "," +
-                     num(pose.orientation.y) + "," + num(pose.orientation.z) + "," + vec(b.linear_velocity) + "," +
-                     vec(b.angular_velocity) + "," + vec(b.fluid_force) + "," + vec(b.fluid_torque));
-    }
-    for (const VirtualCoupling& c : m.couplings)
-      couplings_csv.row(num(t) + "," + m.devices[c.device].name + "," + m.bodies[c.body].name + "," + vec(c.device_force) +
-                        "," + vec(c.device_torque));
+    for (const RigidBody& b : m.bodies) bodies_csv.row(body_row(b, t));
+    for (const VirtualCoupling& c : m.couplings) couplings_csv.row(coupling_row(m, c, t));
   };
   auto export_frame = [&](double t) {
     if (o.export_every_s <= 0 || t + 1e-9 < next_export) return;

@@ -30,6 +30,16 @@ class CsvFile {
   std::FILE* out_ = nullptr;
 };
 
+// History rows, the same in batch and live runs on every backend. Numbers are "%.9g".
+inline constexpr const char* kBodiesCsvHeader = "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz";
+inline constexpr const char* kCouplingsCsvHeader = "t,device,body,fx,fy,fz,tx,ty,tz";
+std::string csv_number(double v);
+std::string csv_vec3(const Vec3& v);
+// One row per body: pose of the mesh frame, velocities, and the fluid's force and torque on it.
+std::string body_row(const RigidBody& body, double time_s);
+// One row per coupling: the wrench to render on the device (without a line end).
+std::string coupling_row(const SimulationModel& model, const VirtualCoupling& coupling, double time_s);
+
 // Writes text to file atomically (temporary name, then rename).
 void write_text_atomically(const std::filesystem::path& file, const std::string& text);
 
