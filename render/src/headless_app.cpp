@@ -56,6 +56,7 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
     while (options.max_frames < 0 || summary.frames < options.max_frames) {
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (options.duration_s >= 0 && elapsed >= options.duration_s) break;
+      if (options.stop_requested && options.stop_requested->load()) break;
       const FrameStatus status = source.next_frame(frame);
       if (status == FrameStatus::end_of_stream) break;
       if (status == FrameStatus::unchanged) {  // a live source with nothing new yet

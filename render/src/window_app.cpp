@@ -220,6 +220,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
         if (options.max_frames >= 0 && summary.frames >= options.max_frames) break;
         const auto now = std::chrono::steady_clock::now();
         if (options.duration_s >= 0 && seconds(now - start) >= options.duration_s) break;
+        if (options.stop_requested && options.stop_requested->load()) break;
         glfwPollEvents();
         // The newest frame, never waiting for one: a finished replay keeps showing its last frame.
         // A recording (finite source) plays at its own pace: the next frame once its sim time is due.

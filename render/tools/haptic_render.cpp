@@ -1,5 +1,8 @@
 // haptic-render: draws the fluid (§5 of the paper) in its own process so that drawing never
 // stalls the simulation or the 1 kHz loop. See `haptic-render --help`.
+#include <signal.h>
+
+#include <atomic>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -21,6 +24,9 @@ using namespace hapfluid;
 using namespace hapfluid::render;
 
 namespace {
+
+std::atomic<bool> g_stop{false};
+void on_stop_signal(int) { g_stop.store(true); }
 
 const char* usage = R"(usage: haptic-render [mode] [source] [options]
 modes:
@@ -182,6 +188,12 @@ std::unique_ptr<FrameSource> make_source(const Args& a) {
 
 int main(int argc, char** argv) {
   const Args a = parse(argc, argv);
+  // SIGINT/SIGTERM (Ctrl-C, the launcher, systemd) end the run like --duration: the PNG being
+  // written is finished, not left as a .partial, and the summary and MP4 still come out.
+  struct sigaction action {};
+  action.sa_handler = on_stop_signal;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
   try {
     auto source = make_source(a);
     RunSummary summary;
@@ -196,6 +208,7 @@ int main(int argc, char** argv) {
       h.settings = a.settings;
       h.camera = a.camera;
       h.validation = a.validation;
+      h.stop_requested = &g_stop;
       summary = run_headless(*source, h);
     } else {
       WindowOptions w;
@@ -205,6 +218,7 @@ int main(int argc, char** argv) {
       w.camera = a.camera;
       w.validation = a.validation;
       w.screenshot = a.screenshot;
+      w.stop_requested = &g_stop;
       summary = run_windowed(*source, w);
     }
     if (a.validation && summary.validation_messages > 0) {

@@ -137,3 +137,25 @@ def test_window_presents_frames_under_xvfb(binary, tmp_path):
     assert panel < sky - 0.1, "the statistics overlay must darken its corner"
     centre = image[230:250, 310:330, :3].mean(axis=(0, 1))
     assert centre[2] > centre[0] + 0.05, "the ball of water in the middle is blue"
+
+
+def test_sigterm_ends_a_headless_run_cleanly(binary, tmp_path):
+    """The launcher and systemd stop the renderer with SIGTERM: it must finish the frame in hand
+    (no half-written .partial PNG left behind), print its summary and exit 0 like a --duration end."""
+    import signal
+    import time
+    proc = subprocess.Popen([str(binary("haptic-render")), "--headless", "--out", str(tmp_path), "--synthetic", "pool",
+                             "--frames", "100000", "--width", "160", "--height", "120", "--no-mp4"],
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob("frame_*.png")) and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the renderer ended before it was signalled"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    frames = sorted(tmp_path.glob("frame_*.png"))
+    assert frames and "wrote %d frames" % len(frames) in err
+    assert not list(tmp_path.glob("*.partial")), "a frame was left half-written"
+    for f in frames:
+        assert f.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

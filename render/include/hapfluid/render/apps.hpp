@@ -3,6 +3,7 @@
 // FluidRenderer.
 #pragma once
 
+#include <atomic>
 #include <filesystem>
 #include <optional>
 
@@ -26,6 +27,9 @@ struct HeadlessOptions {
   RenderSettings settings;
   CameraOverrides camera;
   bool validation = false;
+  // Set (e.g. by a SIGTERM handler) to finish the frame in hand and stop as if the duration had
+  // ended: the frames written so far stay whole and the summary is still printed.
+  const std::atomic<bool>* stop_requested = nullptr;
 };
 
 struct RunSummary {
@@ -39,6 +43,7 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options);
 struct WindowOptions {
   long max_frames = -1;          // close after this many presented frames (tests)
   double duration_s = -1.0;
+  const std::atomic<bool>* stop_requested = nullptr;  // as in HeadlessOptions
   RenderSettings settings;
   CameraOverrides camera;
   bool validation = false;
