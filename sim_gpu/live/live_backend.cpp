@@ -144,8 +144,9 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
       << (cpu_faster ? "cpu backend" : "Vulkan backend (the cpu backend is no faster)")
       << " (--backend vulkan|cpu forces one)\n";
   r.solver = cpu_faster ? std::unique_ptr<LiveSolver>(make_cpu()) : make_vulkan(model, o);
-  r.reason = std::string("auto: Vulkan cannot keep up (") + both + "); the " + (cpu_faster ? "cpu" : "Vulkan") +
-             " backend is faster";
+  r.reason = "auto: Vulkan on " + vulkan_name + " cannot keep up (probe real-time factor " +
+             fixed(r.vulkan_probe.real_time_factor(), 2) + " < " + fixed(o.vulkan_min_real_time_factor, 2) + ", cpu " +
+             fixed(r.cpu_probe.real_time_factor(), 2) + "): the " + (cpu_faster ? "cpu" : "Vulkan") + " backend is faster";
   return r;
 #endif
 }
