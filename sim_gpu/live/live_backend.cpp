@@ -137,7 +137,7 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   }
   const bool cpu_faster = r.cpu_probe.real_time_factor() > r.vulkan_probe.real_time_factor();
   const std::string both = "Vulkan on " + vulkan_name + ": " + probe_words(r.vulkan_probe) + "; cpu backend (" +
-                           std::to_string(o.threads) + " thread(s)): " + probe_words(r.cpu_probe);
+                           std::to_string(o.threads) + (o.threads == 1 ? " thread): " : " threads): ") + probe_words(r.cpu_probe);
   log << "haptic-sim: NOTICE: --backend auto: Vulkan (" << vulkan_name << ") cannot keep up with the wall clock on this "
       << "scene (probe real-time factor " << fixed(r.vulkan_probe.real_time_factor(), 2) << " < "
       << fixed(o.vulkan_min_real_time_factor, 2) << "); " << both << " => running on the "

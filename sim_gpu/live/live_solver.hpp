@@ -19,7 +19,7 @@ namespace hapfluid::sim {
 
 // The device a backend computes on, as stats.json and the start line name it.
 struct ComputeDevice {
-  std::string name;    // "llvmpipe (LLVM 15.0.6, 256 bits)", "1 CPU thread(s)"
+  std::string name;    // "llvmpipe (LLVM 15.0.6, 256 bits)", "2 CPU threads"
   std::string type;    // "CPU", "discrete GPU", ... ; "host" for the cpu backend
   std::string driver;  // "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"; empty for the cpu backend
 };
@@ -56,7 +56,10 @@ class CpuLiveSolver final : public LiveSolver {
   void step(double dt) override { solver_.step(dt); }
   void sync_and_check_finite() override { solver_.check_finite(); }
   const char* backend() const override { return "cpu"; }
-  ComputeDevice device() const override { return {std::to_string(solver_.threads()) + " CPU thread(s)", "host", ""}; }
+  ComputeDevice device() const override {
+    const int n = solver_.threads();
+    return {std::to_string(n) + (n == 1 ? " CPU thread" : " CPU threads"), "host", ""};
+  }
   int threads() const override { return solver_.threads(); }
 
  private:
