@@ -84,6 +84,21 @@ BackendProbe probe_backend(LiveSolver& solver, double simulated_s, double wall_s
   return p;
 }
 
+std::unique_ptr<LiveSolver> make_live_solver(const SimulationModel& model, const std::string& backend,
+                                             const LiveBackendOptions& options) {
+  if (backend == "cpu") return std::make_unique<CpuLiveSolver>(model, options.threads);
+#ifdef HAPFLUID_WITH_VULKAN
+  if (backend == "vulkan") return make_vulkan(model, options);
+#endif
+  throw BackendUnavailable("backend '" + backend + "': expected cpu" +
+#ifdef HAPFLUID_WITH_VULKAN
+                           " or vulkan"
+#else
+                           " (built without the Vulkan backend)"
+#endif
+  );
+}
+
 LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& o, std::ostream& log) {
   if (o.backend != "cpu" && o.backend != "vulkan" && o.backend != "auto")
     throw BackendUnavailable("--backend " + o.backend + ": expected cpu, vulkan or auto");

@@ -64,6 +64,11 @@ class BackendUnavailable : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The solver of one backend, "cpu" or "vulkan" (no choice, no probe); throws what the backend's
+// constructor throws (vulkan::VulkanUnavailable without a usable device).
+std::unique_ptr<LiveSolver> make_live_solver(const SimulationModel& model, const std::string& backend,
+                                             const LiveBackendOptions& options);
+
 // Builds the model of `scene` and the solver chosen by the rule above. Notices go to `log`.
 // Throws BackendUnavailable, or std::runtime_error for a scene no backend can run.
 LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& options, std::ostream& log);
