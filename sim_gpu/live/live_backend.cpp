@@ -145,7 +145,15 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
     return r;
   }
   const std::string vulkan_name = probe->device().name;
-  r.vulkan_probe = probe_backend(*probe, o.probe_simulated_s, o.probe_wall_s);
+  try {
+    r.vulkan_probe = probe_backend(*probe, o.probe_simulated_s, o.probe_wall_s);
+  } catch (const std::exception& e) {  // e.g. a lost device: as unusable as a missing one
+    log << "haptic-sim: notice: --backend auto: Vulkan on " << vulkan_name << " failed its probe (" << e.what()
+        << "); running on the cpu backend\n";
+    r.solver = make_cpu();
+    r.reason = "auto: Vulkan on " + vulkan_name + " failed its probe: " + e.what();
+    return r;
+  }
   probe.reset();
   log << "haptic-sim: --backend auto: probe on Vulkan (" << vulkan_name << "): " << probe_words(r.vulkan_probe)
       << " on this scene\n";
