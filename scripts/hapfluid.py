@@ -328,7 +328,7 @@ def run_live(args, scene_path, out, bin_dir):
                                      "--wait", "10"])
         sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
                                          "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
-                                         "--threads", str(args.sim_threads)],
+                                         "--threads", str(args.sim_threads), "--backend", args.backend],
                           nice=-5)  # feeds the haptic loop: ahead of builds and the renderer
         if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
             raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
@@ -376,6 +376,9 @@ def post_process(out, rig, device_logs, scene_name, started=None):
         summary["real_time_factor"] = round(stats["real_time_factor"], 3)
         summary["sim_kept_up"] = stats["kept_up_with_wall_clock"]
         summary["fluid_particles"] = stats["particles"]["fluid"]
+        summary["sim_backend"] = stats.get("backend", "cpu")
+        summary["sim_device"] = stats.get("device", {}).get("name", "")
+        summary["sim_backend_reason"] = stats.get("backend_choice", {}).get("reason", "")
     logs = {n: read_device_log(p) for n, p in device_logs.items() if p.exists()}
     if logs:
         # One time axis: the sim's (wall clock since it started, = simulated time at real-time
@@ -411,6 +414,7 @@ def print_summary(summary):
     print("hapfluid: summary")
     if "sim_steps_per_s" in summary:
         kept = "kept up with the wall clock" if summary["sim_kept_up"] else "could NOT keep up with the wall clock"
+        print(f"  sim: {summary['sim_backend']} backend on {summary['sim_device']} ({summary['sim_backend_reason']})")
         print(f"  sim: {summary['sim_steps_per_s']} steps/s, real-time factor {summary['real_time_factor']} "
               f"({kept}), {summary['fluid_particles']} fluid particles")
     print(f"  rendered frames: {summary.get('rendered_frames', 0)}")
@@ -439,6 +443,9 @@ def main():
     run.add_argument("--sim-threads", type=int, default=max(1, (os.cpu_count() or 2) - 1),
                      help="simulator threads (default: one core left for the loop and the devices)")
     run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")
+    run.add_argument("--backend", choices=("auto", "vulkan", "cpu"), default="auto",
+                     help="simulator backend (auto: Vulkan if it keeps up with the wall clock on this machine and "
+                          "scene, else the faster one, said in the sim's log and the summary; sim_gpu/live/README.md)")
     args = parser.parse_args()
 
     build = pathlib.Path(args.build)
@@ -455,7 +462,7 @@ def main():
         sys.exit(f"hapfluid: not built: {', '.join(missing)} (run `make`)")
 
     if args.batch:
-        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", "cpu", "--out", str(out / "sim")]
+        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", args.backend, "--out", str(out / "sim")]
         if args.duration:
             command += ["--duration", str(args.duration)]
         return subprocess.run(command).returncode

@@ -15,7 +15,8 @@ namespace {
 
 void usage(std::ostream& out) {
   out << "usage: haptic-sim --live --scene FILE [--rig FILE] [--shm-prefix NAME] [--out DIR] [--duration S]\n"
-         "                  [--threads N] [--backend cpu|auto] [--max-lag S] [--status-every S]\n"
+         "                  [--threads N] [--backend auto|vulkan|cpu] [--vk-device auto|gpu|cpu] [--max-lag S]\n"
+         "                  [--status-every S]\n"
          "  --live              run as the live simulator: device poses from /<prefix>.device_states\n"
          "                      (haptic-rt), sim samples to /<prefix>.sim_samples, particle frames to\n"
          "                      /<prefix>.particles (haptic-render); simulated time follows the wall clock\n"
@@ -23,7 +24,11 @@ void usage(std::ostream& out) {
          "  --shm-prefix NAME   shared-memory prefix (default: the rig's, else \"hapfluid\")\n"
          "  --out DIR           write couplings.csv, bodies.csv and stats.json of the live run\n"
          "  --duration S        stop after S seconds of wall time (default: until SIGINT/SIGTERM)\n"
-         "  --threads N         worker threads (default: all cores)\n"
+         "  --threads N         worker threads of the cpu backend (default: all cores)\n"
+         "  --backend B         auto (default): Vulkan (a GPU, else lavapipe) if a ~1 s probe at start shows it keeps\n"
+         "                      up with the wall clock on this scene, else the faster of Vulkan and cpu, said\n"
+         "                      loudly; cpu when no Vulkan device is usable (with a notice). vulkan|cpu: that one\n"
+         "  --vk-device D       Vulkan device: auto (a GPU, else lavapipe), gpu, cpu (lavapipe)\n"
          "  --max-lag S         backlog tolerated before the fluid is declared slower than real time (0.1)\n"
          "  --status-every S    status line interval on stderr (default 5; 0: none)\n"
          "Rig device N drives the scene device with source = \"rig\" and rig_device = \"N\", else the\n"
@@ -66,6 +71,7 @@ int live_main(int argc, char** argv) {
     else if (a == "--shm-prefix") o.shm_prefix = v;
     else if (a == "--out") o.out = v;
     else if (a == "--backend") o.backend = v;
+    else if (a == "--vk-device") o.vulkan_device = v;
     else if (a == "--duration") {
       if (!number(a, v, o.duration_s, 0)) return 2;
     } else if (a == "--threads") {

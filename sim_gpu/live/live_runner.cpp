@@ -18,8 +18,8 @@
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/rt/sd_notify.hpp"
 #include "hapfluid/shm/channel.hpp"
-#include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/outputs.hpp"
+#include "live_backend.hpp"
 
 namespace hapfluid::sim {
 namespace {
@@ -118,8 +118,17 @@ struct Counters {
   double dropped_backlog_s = 0, dt_min = 1e300, dt_max = 0, step_wall_max_s = 0;
 };
 
-std::string stats_json(const LiveOptions& o, const CpuSolver& solver, const Counters& c, double wall_s,
+std::string probe_json(const BackendProbe& p) {
+  if (!p.ran) return "null";
+  return "{\"steps\": " + std::to_string(p.steps) + ", \"simulated_s\": " + num(p.simulated_s) + ", \"wall_s\": " +
+         num(p.wall_s) + ", \"steps_per_s\": " + num(p.steps_per_s()) + ", \"real_time_factor\": " +
+         num(p.real_time_factor()) + "}";
+}
+
+std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const Counters& c, double wall_s,
                        const std::vector<std::string>& device_map, bool complete, const std::string& error) {
+  const LiveSolver& solver = *backend.solver;
+  const ComputeDevice device = solver.device();
   const SimulationModel& m = solver.model();
   const double steps = static_cast<double>(solver.steps());
   const double wall = std::max(wall_s, 1e-9);
@@ -127,7 +136,13 @@ std::string stats_json(const LiveOptions& o, const CpuSolver& solver, const Coun
   j << "{\n  \"mode\": \"live\",\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
   if (!error.empty()) j << "  \"error\": \"" << json_escape(error) << "\",\n";
   j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
-    << "  \"backend\": \"" << o.backend << "\",\n  \"threads\": " << solver.threads() << ",\n"
+    << "  \"backend\": \"" << solver.backend() << "\",\n"
+    << "  \"device\": {\"name\": \"" << json_escape(device.name) << "\", \"type\": \"" << json_escape(device.type)
+    << "\", \"driver\": \"" << json_escape(device.driver) << "\"},\n"
+    << "  \"backend_choice\": {\"requested\": \"" << json_escape(backend.requested) << "\", \"reason\": \""
+    << json_escape(backend.reason) << "\", \"vulkan_probe\": " << probe_json(backend.vulkan_probe)
+    << ", \"cpu_probe\": " << probe_json(backend.cpu_probe) << "},\n"
+    << "  \"threads\": " << solver.threads() << ",\n"
     << "  \"particles\": {\"fluid\": " << m.fluid.size() << ", \"boundary\": " << m.wall_particle_count
     << ", \"static_body\": " << m.static_body_particle_count << ", \"body\": " << m.body_particles.size() << "},\n"
     << "  \"steps\": " << solver.steps() << ",\n"
@@ -150,11 +165,6 @@ std::string stats_json(const LiveOptions& o, const CpuSolver& solver, const Coun
 }  // namespace
 
 int run_live(const LiveOptions& o, std::ostream& log) {
-  if (o.backend != "cpu" && o.backend != "auto") {
-    log << "haptic-sim: --backend " << o.backend << ": the live mode of this build has the cpu backend only\n";
-    return 2;
-  }
-  if (o.backend == "auto") log << "haptic-sim: --backend auto: the live mode runs the cpu backend (no Vulkan live path yet)\n";
   if (o.threads < 1 || o.threads > 256) {
     log << "haptic-sim: --threads " << o.threads << ": must be 1..256\n";
     return 2;
@@ -175,13 +185,19 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   }
   if (prefix.empty()) prefix = "hapfluid";
 
-  std::unique_ptr<CpuSolver> solver;
+  // Before any segment exists: haptic-rt sees no sim until it is ready (the auto probe takes ~1 s).
+  LiveBackend backend;
   try {
-    solver = std::make_unique<CpuSolver>(build_model(scene), o.threads);
+    LiveBackendOptions bo;
+    bo.backend = o.backend;
+    bo.vulkan_device = o.vulkan_device;
+    bo.threads = o.threads;
+    backend = choose_live_backend(scene, bo, log);
   } catch (const std::exception& e) {
     log << "haptic-sim: " << e.what() << "\n";
     return 2;
   }
+  LiveSolver* solver = backend.solver.get();
   const SimulationModel& m = solver->model();
   const std::size_t fluid_count = m.fluid.size();
   if (m.bodies.size() > std::size_t(shm::kMaxBodies))
@@ -220,8 +236,11 @@ int run_live(const LiveOptions& o, std::ostream& log) {
     return 2;
   }
 
-  log << "haptic-sim: live: scene \"" << m.scene_name << "\", " << fluid_count << " fluid particles, " << m.bodies.size()
-      << " bodies, " << m.devices.size() << " scene devices, " << solver->threads() << " threads; shm /" << prefix
+  const ComputeDevice device = solver->device();
+  log << "haptic-sim: live: backend " << solver->backend() << " on " << device.name
+      << (device.driver.empty() ? "" : " (" + device.type + ", " + device.driver + ")") << " [" << backend.reason
+      << "]; scene \"" << m.scene_name << "\", " << fluid_count << " fluid particles, " << m.bodies.size()
+      << " bodies, " << m.devices.size() << " scene devices; shm /" << prefix
       << ".{sim_samples,particles} (reads /" << prefix << ".device_states)\n";
 
   // Buffers reused every step: nothing below allocates per step except the CSV rows.
@@ -280,6 +299,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   };
 
   try {
+    solver->sync_and_check_finite();
     publish_particles(start_ns);
     while (!g_stop.load()) {
       std::uint64_t now = shm::monotonic_ns();
@@ -382,7 +402,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         cm = {};
         const int d = i < s.device_count ? scene_device_of_entry[i] : -1;
         if (d < 0 || !input.live()) continue;
-        const DeviceState& x0 = solver->device_states()[d];
+        const DeviceState& x0 = held[d];  // what set_device_state gave the step
         put3(x0.position, cm.x0_m);
         put4(x0.orientation, cm.q0);
         put3(x0.linear_velocity, cm.v0_m_s);
@@ -413,7 +433,8 @@ int run_live(const LiveOptions& o, std::ostream& log) {
           couplings_csv->row(coupling_row(m, vc, solver->time_s()) + tail);
       }
       if (solver->time_s() + 1e-9 >= next_frame_s) {
-        solver->check_finite();  // once per frame: a diverged fluid stops the run, named
+        // Once per frame: the particles come back (Vulkan) and a diverged fluid stops the run, named.
+        solver->sync_and_check_finite();
         publish_particles(shm::monotonic_ns());
         next_frame_s += frame_period;
         if (next_frame_s < solver->time_s()) next_frame_s = solver->time_s() + frame_period;
@@ -452,12 +473,13 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       if (couplings_csv) couplings_csv->finish();
       if (bodies_csv) bodies_csv->finish();
     }
-    write_text_atomically(o.out / "stats.json", stats_json(o, *solver, c, wall_s, matches, error.empty(), error));
+    write_text_atomically(o.out / "stats.json", stats_json(o, backend, c, wall_s, matches, error.empty(), error));
   }
   char line[300];
   std::snprintf(line, sizeof line,
-                "haptic-sim: live run %s: %llu steps in %.2f s (%.0f steps/s), %.2f s simulated, real-time factor %.3f%s\n",
-                error.empty() ? "stopped" : "FAILED", (unsigned long long)solver->steps(), wall_s,
+                "haptic-sim: live run %s on the %s backend: %llu steps in %.2f s (%.0f steps/s), %.2f s simulated, "
+                "real-time factor %.3f%s\n",
+                error.empty() ? "stopped" : "FAILED", solver->backend(), (unsigned long long)solver->steps(), wall_s,
                 double(solver->steps()) / std::max(wall_s, 1e-9), solver->time_s(), solver->time_s() / std::max(wall_s, 1e-9),
                 c.lag_events ? " (could NOT keep up with the wall clock)" : "");
   log << line;

@@ -30,7 +30,8 @@ namespace hapfluid::sim {
 struct LiveOptions {
   std::filesystem::path scene;
   std::filesystem::path rig;       // optional: shm prefix and group from the rig's [rt.shm]
-  std::string backend = "cpu";
+  std::string backend = "auto";    // cpu | vulkan | auto (live_backend.hpp has the rule)
+  std::string vulkan_device = "auto";  // auto | gpu | cpu (lavapipe)
   std::string shm_prefix;          // empty: the rig's, else "hapfluid"
   std::filesystem::path out;       // empty: no files (couplings.csv, bodies.csv, stats.json)
   double duration_s = 0;           // wall seconds; 0: until SIGINT/SIGTERM

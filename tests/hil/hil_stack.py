@@ -112,10 +112,13 @@ class Stack:
         time.sleep(0.5)
         return p
 
-    def sim(self, scene, name="sim", extra=()):
+    def sim(self, scene, name="sim", extra=(), backend="cpu"):
+        """haptic-sim --live; the cpu backend unless asked (tests of other parts skip the ~1 s
+        backend probe of `auto` and lavapipe's slower steps; test_live_vulkan.py covers those)."""
         p = self._start(name, [self.binary("haptic-sim"), "--live", "--scene", SCENES / f"{scene}.toml",
                                "--shm-prefix", self.prefix, "--out", self.dir / name, "--threads", "1",
-                               "--status-every", "1", *extra], nice=-5)  # as its systemd unit (Nice=-5)
+                               "--backend", backend, "--status-every", "1", *extra],
+                        nice=-5)  # as its systemd unit (Nice=-5)
         self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.sim_samples") or p.poll() is not None, 30)
         assert p.poll() is None, f"haptic-sim stopped: {self.log(name)}"
         return p

@@ -21,6 +21,9 @@ def test_a_short_live_run_leaves_its_outputs_and_nothing_else(build_dir, tmp_pat
     assert summary["ok"] and summary["sim_steps_per_s"] > 0 and summary["max_force_on_hand_n"]["hand"] > 0
     assert "p99" in summary["wake_latency_us"]
     assert "steps/s" in result.stdout and "wake latency" in result.stdout and "max force on the hand" in result.stdout
+    # The summary names the backend the sim ran on and why (--backend auto: Vulkan only if it keeps up).
+    assert summary["sim_backend"] in ("vulkan", "cpu") and summary["sim_device"] and summary["sim_backend_reason"]
+    assert f"{summary['sim_backend']} backend on {summary['sim_device']}" in result.stdout
     # Every process stopped with exit 0 (the launcher checks) and took its segments with it.
     prefix = next(l for l in (out / "logs" / "haptic-rt.log").read_text().splitlines() if "shm /" in l)
     prefix = prefix.split("shm /")[1].split(".*")[0]

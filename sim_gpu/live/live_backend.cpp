@@ -1,0 +1,186 @@
+#include "live_backend.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#ifdef HAPFLUID_WITH_VULKAN
+#include "hapfluid/sim_vulkan/vulkan_solver.hpp"
+#endif
+
+namespace hapfluid::sim {
+namespace {
+
+#ifdef HAPFLUID_WITH_VULKAN
+class VulkanLiveSolver final : public LiveSolver {
+ public:
+  VulkanLiveSolver(SimulationModel model, const vulkan::VulkanSolverOptions& options)
+      : solver_(std::move(model), options) {}
+  const SimulationModel& model() const override { return solver_.model(); }
+  double time_s() const override { return solver_.time_s(); }
+  std::uint64_t steps() const override { return solver_.steps(); }
+  void set_device_state(std::size_t device, const DeviceState& state) override { solver_.set_device_state(device, state); }
+  double stable_time_step() const override { return solver_.stable_time_step(); }
+  // One step is one or two submissions (two with dynamic bodies: the host integrates them in
+  // between, so bodies and couplings are on the host after every step).
+  void step(double dt) override { solver_.step(dt); }
+  void sync_and_check_finite() override {
+    solver_.check_finite();  // reads the particles back first; names the first non-finite fluid particle
+    // The bodies live on the host: the rest of CpuSolver::check_finite.
+    auto finite = [](const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); };
+    for (const RigidBody& b : solver_.model().bodies)
+      if (!finite(b.position) || !finite(b.linear_velocity) || !finite(b.angular_velocity))
+        throw std::runtime_error("simulation diverged at t = " + std::to_string(solver_.time_s()) + " s: body " + b.name +
+                                 " has a non-finite state (lower time.cfl or time.max_dt_s, or the coupling gains)");
+  }
+  const char* backend() const override { return "vulkan"; }
+  ComputeDevice device() const override {
+    const vulkan::DeviceDescription& d = solver_.device();
+    return {d.name, d.type, d.driver};
+  }
+  int threads() const override { return 0; }
+
+ private:
+  vulkan::VulkanSolver solver_;
+};
+
+std::unique_ptr<LiveSolver> make_vulkan(const SimulationModel& model, const LiveBackendOptions& o) {
+  vulkan::VulkanSolverOptions options;
+  options.context.device = vulkan::parse_device_preference(o.vulkan_device);
+  // No per-pass timestamps in live runs: their read-back would be one more wait per step.
+  options.timestamps = false;
+  return std::make_unique<VulkanLiveSolver>(model, options);
+}
+#endif
+
+std::string fixed(double v, int digits) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.*f", digits, v);
+  return text;
+}
+
+std::string probe_words(const BackendProbe& p) {
+  return fixed(p.steps_per_s(), 0) + " steps/s, real-time factor " + fixed(p.real_time_factor(), 2);
+}
+
+}  // namespace
+
+BackendProbe probe_backend(LiveSolver& solver, double simulated_s, double wall_s) {
+  using clock = std::chrono::steady_clock;
+  for (int i = 0; i < 3; ++i) solver.step(solver.stable_time_step());  // warm-up, not timed
+  BackendProbe p;
+  p.ran = true;
+  const double t0 = solver.time_s();
+  const std::uint64_t n0 = solver.steps();
+  const auto start = clock::now();
+  double wall = 0;
+  while (solver.time_s() - t0 < simulated_s && wall < wall_s) {
+    solver.step(solver.stable_time_step());
+    wall = std::chrono::duration<double>(clock::now() - start).count();
+  }
+  p.steps = solver.steps() - n0;
+  p.simulated_s = solver.time_s() - t0;
+  p.wall_s = wall;
+  return p;
+}
+
+std::unique_ptr<LiveSolver> make_live_solver(const SimulationModel& model, const std::string& backend,
+                                             const LiveBackendOptions& options) {
+  if (backend == "cpu") return std::make_unique<CpuLiveSolver>(model, options.threads);
+#ifdef HAPFLUID_WITH_VULKAN
+  if (backend == "vulkan") return make_vulkan(model, options);
+#endif
+  throw BackendUnavailable("backend '" + backend + "': expected cpu" +
+#ifdef HAPFLUID_WITH_VULKAN
+                           " or vulkan"
+#else
+                           " (built without the Vulkan backend)"
+#endif
+  );
+}
+
+LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& o, std::ostream& log) {
+  if (o.backend != "cpu" && o.backend != "vulkan" && o.backend != "auto")
+    throw BackendUnavailable("--backend " + o.backend + ": expected cpu, vulkan or auto");
+  const SimulationModel model = build_model(scene);
+  LiveBackend r;
+  r.requested = o.backend;
+  auto make_cpu = [&] { return std::make_unique<CpuLiveSolver>(model, o.threads); };
+  if (o.backend == "cpu") {
+    r.solver = make_cpu();
+    r.reason = "--backend cpu";
+    return r;
+  }
+#ifndef HAPFLUID_WITH_VULKAN
+  if (o.backend == "vulkan")
+    throw BackendUnavailable("--backend vulkan: this haptic-sim was built without the Vulkan backend (sim_gpu/vulkan)");
+  log << "haptic-sim: notice: --backend auto: built without the Vulkan backend; running on the cpu backend\n";
+  r.solver = make_cpu();
+  r.reason = "auto: built without the Vulkan backend";
+  return r;
+#else
+  if (o.backend == "vulkan") {
+    try {
+      r.solver = make_vulkan(model, o);
+    } catch (const vulkan::VulkanError& e) {
+      throw BackendUnavailable(std::string("--backend vulkan: ") + e.what() + " (or run with --backend cpu or auto)");
+    } catch (const std::invalid_argument& e) {
+      throw BackendUnavailable(std::string("--vk-device: ") + e.what());
+    }
+    r.reason = "--backend vulkan";
+    return r;
+  }
+
+  // auto: the rule in live_backend.hpp.
+  std::unique_ptr<LiveSolver> probe;
+  try {
+    probe = make_vulkan(model, o);
+  } catch (const std::invalid_argument& e) {
+    throw BackendUnavailable(std::string("--vk-device: ") + e.what());
+  } catch (const std::exception& e) {  // no loader, no ICD, no device, or a scene beyond its limits
+    log << "haptic-sim: notice: --backend auto: no usable Vulkan device (" << e.what()
+        << "); running on the cpu backend\n";
+    r.solver = make_cpu();
+    r.reason = std::string("auto: no usable Vulkan device: ") + e.what();
+    return r;
+  }
+  const std::string vulkan_name = probe->device().name;
+  try {
+    r.vulkan_probe = probe_backend(*probe, o.probe_simulated_s, o.probe_wall_s);
+  } catch (const std::exception& e) {  // e.g. a lost device: as unusable as a missing one
+    log << "haptic-sim: notice: --backend auto: Vulkan on " << vulkan_name << " failed its probe (" << e.what()
+        << "); running on the cpu backend\n";
+    r.solver = make_cpu();
+    r.reason = "auto: Vulkan on " + vulkan_name + " failed its probe: " + e.what();
+    return r;
+  }
+  probe.reset();
+  log << "haptic-sim: --backend auto: probe on Vulkan (" << vulkan_name << "): " << probe_words(r.vulkan_probe)
+      << " on this scene\n";
+  if (r.vulkan_probe.real_time_factor() >= o.vulkan_min_real_time_factor) {
+    r.solver = make_vulkan(model, o);
+    r.reason = "auto: Vulkan keeps up (probe real-time factor " + fixed(r.vulkan_probe.real_time_factor(), 2) + " >= " +
+               fixed(o.vulkan_min_real_time_factor, 2) + ")";
+    return r;
+  }
+  {
+    CpuLiveSolver cpu_probe(model, o.threads);
+    r.cpu_probe = probe_backend(cpu_probe, o.probe_simulated_s, o.probe_wall_s);
+  }
+  const bool cpu_faster = r.cpu_probe.real_time_factor() > r.vulkan_probe.real_time_factor();
+  const std::string both = "Vulkan on " + vulkan_name + ": " + probe_words(r.vulkan_probe) + "; cpu backend (" +
+                           std::to_string(o.threads) + (o.threads == 1 ? " thread): " : " threads): ") + probe_words(r.cpu_probe);
+  log << "haptic-sim: NOTICE: --backend auto: Vulkan (" << vulkan_name << ") cannot keep up with the wall clock on this "
+      << "scene (probe real-time factor " << fixed(r.vulkan_probe.real_time_factor(), 2) << " < "
+      << fixed(o.vulkan_min_real_time_factor, 2) << "); " << both << " => running on the "
+      << (cpu_faster ? "cpu backend" : "Vulkan backend (the cpu backend is no faster)")
+      << " (--backend vulkan|cpu forces one)\n";
+  r.solver = cpu_faster ? std::unique_ptr<LiveSolver>(make_cpu()) : make_vulkan(model, o);
+  r.reason = "auto: Vulkan on " + vulkan_name + " cannot keep up (probe real-time factor " +
+             fixed(r.vulkan_probe.real_time_factor(), 2) + " < " + fixed(o.vulkan_min_real_time_factor, 2) + ", cpu " +
+             fixed(r.cpu_probe.real_time_factor(), 2) + "): the " + (cpu_faster ? "cpu" : "Vulkan") + " backend is faster";
+  return r;
+#endif
+}
+
+}  // namespace hapfluid::sim
