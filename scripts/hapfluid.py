@@ -33,6 +33,7 @@ import re
 import signal
 import subprocess
 import sys
+import tomllib
 import time
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -52,7 +53,6 @@ def resolve_scene(name: str) -> pathlib.Path:
 
 
 def load_toml(path: pathlib.Path) -> dict:
-    import tomllib
     with path.open("rb") as f:
         return tomllib.load(f)
 
@@ -81,9 +81,8 @@ def device_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: float, of
     """The scene as the fake devices play it:
       * every scripted motion segment starts delay_s later (lead-in): the hands hold their start
         poses while the loop engages and the fluid settles (the simulator starts last);
-      * positions in the DEVICE frame: x_device = x_scene - offset for devices in `offsets` (the
-        rig's workspace mapping x_scene = offset + x_device, scale 1, no rotation), so the
-        emulated arm stays inside its mechanical workspace;
+      * positions in the DEVICE frame: x_device = x_scene - offset for devices in `offsets`
+        (private_rig_text), so the emulated arm stays inside its mechanical workspace;
       * mesh paths absolute, so the copy can live anywhere."""
     offsets = offsets or {}
     lines, in_motion, has_start, section, device = [], False, False, "", None
@@ -125,42 +124,43 @@ def default_rig(scene: dict) -> pathlib.Path:
 
 
 def private_rig_text(text: str, scene: dict, tag: str) -> tuple[str, dict]:
-    """The rig with loopback sockets private to this run (paths < 108 bytes) and, for loopback
-    (emulated) devices with an identity workspace mapping, the mapping centred on the scene hand's
-    start position: the emulated arm starts at the middle of its workspace (its end stops are at
-    +-0.3 m) instead of pressing against an end stop. Returns (text, {device: offset})."""
+    """The rig with loopback sockets private to this run (paths < 108 bytes), and for each loopback
+    (emulated) device the translation from the scene frame to its device frame, so the fake arm
+    plays the scene's hand inside its mechanical workspace (end stops at +-0.3 m around its origin):
+    x_scene = workspace_centre + x_rig (haptic-sim, the scene's devices.workspace_centre_m, default
+    the hand's start) and x_rig = offset + x_device (the rig's mapping). The rig itself is not
+    changed. Returns (text, {scene device: workspace_centre + offset})."""
     names = []
 
     def replace(match):
         names.append(match.group(1))
         return f'address = "/tmp/hapfluid-{tag}-{len(names)}.sock"'
-    blocks = re.split(r"(?m)^(?=\[\[devices\]\])", text)
     offsets = {}
-    for i, block in enumerate(blocks):
+    for block in re.split(r"(?m)^(?=\[\[devices\]\])", text):
         if not block.startswith("[[devices]]") or 'kind = "loopback"' not in block:
             continue
         name = re.search(r'(?m)^name\s*=\s*"([^"]+)"', block).group(1)
         sdev = scene_device_for(scene, name)
-        mapping = re.search(r"(?m)^mapping\s*=.*$", block)
-        identity = mapping is None or re.fullmatch(
-            r"mapping\s*=\s*\{\s*offset_m\s*=\s*\[0(\.0)?,\s*0(\.0)?,\s*0(\.0)?\],\s*scale\s*=\s*1(\.0)?,\s*"
-            r"rotation\s*=\s*\[1(\.0)?,\s*0(\.0)?,\s*0(\.0)?,\s*0(\.0)?\]\s*\}", mapping.group(0).strip())
-        if sdev is None or not identity:
+        if sdev is None:
             continue
-        offset = [float(v) for v in sdev.get("start_position_m", [0.0, 0.0, 0.0])]
-        line = f"mapping = {{ offset_m = {_fmt(offset)}, scale = 1.0, rotation = [1.0, 0.0, 0.0, 0.0] }}"
-        block = block.replace(mapping.group(0), line) if mapping else re.sub(
-            r'(?m)^(name\s*=\s*"[^"]+"\n)', lambda m: m.group(1) + line + "\n", block, count=1)
-        blocks[i] = block
-        offsets[name] = offset
-    text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', replace, "".join(blocks))
+        mapping = tomllib.loads(block).get("devices", [{}])[0].get("mapping", {})
+        scale = float(mapping.get("scale", 1.0))
+        rotation = [float(v) for v in mapping.get("rotation", [1.0, 0.0, 0.0, 0.0])]
+        if abs(scale - 1.0) > 1e-12 or max(abs(a - b) for a, b in zip(rotation, [1.0, 0.0, 0.0, 0.0])) > 1e-12:
+            raise SystemExit(f"hapfluid: rig device \"{name}\": an emulated arm plays the scene's scripted hand "
+                             f"translated only; its mapping must have scale = 1 and no rotation (has scale = {scale}, "
+                             f"rotation = {rotation})")
+        centre = [float(v) for v in sdev.get("workspace_centre_m", sdev.get("start_position_m", [0.0, 0.0, 0.0]))]
+        offset = [float(v) for v in mapping.get("offset_m", [0.0, 0.0, 0.0])]
+        offsets[sdev["name"]] = [c + o for c, o in zip(centre, offset)]
+    text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', replace, text)
     return text, offsets
 
 
 def private_rig(rig: pathlib.Path, out: pathlib.Path, tag: str, scene: dict) -> tuple[pathlib.Path, dict]:
     text, offsets = private_rig_text(rig.read_text(), scene, tag)
     copy = out / "rig.toml"
-    copy.write_text(f"# {rig} with private loopback sockets and scene-centred emulated arms for this run\n" + text)
+    copy.write_text(f"# {rig} with loopback sockets private to this run\n" + text)
     return copy, offsets
 
 

@@ -243,6 +243,7 @@ SceneDevice read_device(Reader& r) {
   if (d.source == DeviceSource::rig)
     r.check("rig_device", !d.rig_device.empty(), "missing (a device with source = \"rig\" names its rig device)");
   d.motion.start = read_pose(r, "start_position_m", "start_orientation", true);
+  d.workspace_centre_m = r.vec3("workspace_centre_m", d.motion.start.position_m);
   for (auto& seg : r.tables("motion")) d.motion.segments.push_back(read_segment(seg));
   r.finish();
   return d;

@@ -48,9 +48,10 @@ int match_scene_device(const config::Scene& scene, const SimulationModel& model,
   return -1;
 }
 
-DeviceState from_entry(const shm::DeviceStateEntry& e) {
+// Rig frame -> scene frame: the scene device's workspace centre is where the rig origin lands.
+DeviceState from_entry(const shm::DeviceStateEntry& e, const Vec3& workspace_centre) {
   DeviceState s;
-  s.position = {e.position_m[0], e.position_m[1], e.position_m[2]};
+  s.position = Vec3{e.position_m[0], e.position_m[1], e.position_m[2]} + workspace_centre;
   s.orientation = normalized(Quat{e.orientation[0], e.orientation[1], e.orientation[2], e.orientation[3]});
   s.linear_velocity = {e.linear_velocity_m_s[0], e.linear_velocity_m_s[1], e.linear_velocity_m_s[2]};
   s.angular_velocity = {e.angular_velocity_rad_s[0], e.angular_velocity_rad_s[1], e.angular_velocity_rad_s[2]};
@@ -251,6 +252,9 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   std::vector<std::string> device_map(shm::kMaxDevices);
   std::vector<bool> unmatched_said(shm::kMaxDevices, false);
   std::vector<DeviceState> held(m.devices.size());
+  std::vector<Vec3> centre(m.devices.size());
+  for (std::size_t d = 0; d < m.devices.size(); ++d)
+    if (const config::SceneDevice* sd = scene.find_device(m.devices[d].name)) centre[d] = from_config(sd->workspace_centre_m);
   for (std::size_t d = 0; d < m.devices.size(); ++d) held[d] = device_state_from(config::evaluate_motion(m.devices[d].motion, 0));
   shm::DeviceStatesRecord devices{};
   bool have_devices = false;
@@ -362,7 +366,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       for (std::size_t d = 0; d < m.devices.size(); ++d) {
         const int i = live_device_of_scene[d];
         if (i >= 0 && input.live() && finite_entry(devices.devices[i])) {
-          held[d] = from_entry(devices.devices[i]);
+          held[d] = from_entry(devices.devices[i], centre[d]);
         } else if (i >= 0) {
           held[d].linear_velocity = {}, held[d].angular_velocity = {};  // no fresh pose: hold still
         } else {
@@ -403,7 +407,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         const int d = i < s.device_count ? scene_device_of_entry[i] : -1;
         if (d < 0 || !input.live()) continue;
         const DeviceState& x0 = held[d];  // what set_device_state gave the step
-        put3(x0.position, cm.x0_m);
+        put3(x0.position - centre[d], cm.x0_m);  // back to the rig frame haptic-rt compares it in
         put4(x0.orientation, cm.q0);
         put3(x0.linear_velocity, cm.v0_m_s);
         put3(x0.angular_velocity, cm.w0_rad_s);

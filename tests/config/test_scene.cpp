@@ -180,3 +180,16 @@ TEST(Scene, RigDeviceNeedsItsName) {
 TEST(Scene, DuplicateBodyNames) {
   expect_problem(kBase + kSpoon + kSpoon, "duplicate body name \"spoon\"");
 }
+
+TEST(Scene, WorkspaceCentreDefaultsToTheHandsStart) {
+  // A live device's rig-frame origin (its workspace centre) lands where the scene's hand starts,
+  // so one rig serves scenes whatever their coordinates; a scene may place it elsewhere.
+  Scene s = parse_scene(kBase + kHand, kScenePath);
+  EXPECT_DOUBLE_EQ(s.devices.at(0).workspace_centre_m.x, 0.2);
+  EXPECT_DOUBLE_EQ(s.devices.at(0).workspace_centre_m.z, 0.3);
+  Scene moved = parse_scene(kBase + kHand + "workspace_centre_m = [0.1, 0.15, 0.2]\n", kScenePath);
+  EXPECT_DOUBLE_EQ(moved.devices.at(0).workspace_centre_m.x, 0.1);
+  EXPECT_DOUBLE_EQ(moved.devices.at(0).workspace_centre_m.z, 0.2);
+  expect_problem(kBase + kHand + "workspace_centre_m = [0.1, 0.15]\n",
+                 "devices.hand.workspace_centre_m = [0.1, 0.15]: must be an array of 3 finite numbers");
+}

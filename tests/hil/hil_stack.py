@@ -64,7 +64,7 @@ class Stack:
     def __init__(self, binary, tmp_path: pathlib.Path, rig="fake_single.toml", tag="hil", lead_in_s=LEAD_IN_S,
                  scene="spoon_stirring"):
         """A private copy of a shipped rig, as `make run` makes it: own loopback sockets and shm
-        prefix, emulated arms' workspaces centred on `scene`'s hands (hapfluid.private_rig_text)."""
+        prefix, emulated arms playing `scene`'s hands in their device frame (hapfluid.private_rig_text)."""
         self.binary = binary
         self.lead_in_s = lead_in_s
         self.dir = tmp_path

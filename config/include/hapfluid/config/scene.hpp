@@ -77,6 +77,10 @@ struct SceneDevice {
   DeviceSource source = DeviceSource::scripted;
   std::string rig_device;      // source = rig: the rig device's name
   ScriptedMotion motion;       // source = scripted (also the start pose for rig devices)
+  // Live: the scene point where the rig frame's origin lands (x_scene = x_rig + this), so a
+  // device's workspace, centred on its rig-frame origin, surrounds the scene's hand whatever
+  // the scene's coordinates. Default: the start position (the hand starts at the centre).
+  Vec3 workspace_centre_m;
 };
 
 struct Coupling {
