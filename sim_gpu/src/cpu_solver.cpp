@@ -153,12 +153,13 @@ void CpuSolver::compute_body_contact_pressure(std::size_t begin, std::size_t end
 }
 
 // Forces on fluid particles (Algorithm 1, lines 4-12). With V = m / rho:
-//   pressure (eq. 5): f_p = -V_p sum_i V_i (P_p + P_i) grad W
+//   pressure (eq. 5): f_p = -(V_p / c_p) sum_i (V_i / c_i) (P_p + P_i) grad W
 //   viscosity (eqs. 6, 9): f_p = V_p sum_i V_i (mu_p + mu_i) / 2 (v_i - v_p) lap W
 // The pressure pair term is (P_p + P_i), not the paper's (P_p + P_i) / 2: with the half, the sum
 // estimates only half of grad P (sum_i V_i grad W vanishes in the bulk), and a column at rest
-// would settle at twice the hydrostatic pressure. Wall and body particles take the fluid
-// particle's own pressure (pressure mirroring, Akinci et al. 2012); walls are free-slip.
+// would settle at twice the hydrostatic pressure. c is the first-moment correction of the fluid
+// volumes (gradient_correction.hpp); wall and body particles keep their volumes (c = 1) and
+// take the fluid particle's own pressure (pressure mirroring, Akinci et al. 2012).
 void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int worker) {
   worker_max_accel_[worker] = detail::fluid_force_pass(m_.params, m_.fluid, m_.static_solids, body_view_, begin, end,
                                                        neighbour_lists_[worker], neighbour_ranges_.data());
@@ -188,7 +189,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
         const float pj = f.pressure[j];
-        const float pterm = -f.volume[j] * (pj + pj) * spiky_grad_factor(k, r, hr);
+        const float pterm = -f.volume[j] * (2.0f * pj * f.volume_correction[j]) * spiky_grad_factor(k, r, hr);
         const float vterm = f.volume[j] * 0.5f * (f.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
         fx += pterm * dx + vterm * (f.vx[j] - vxi);
         fy += pterm * dy + vterm * (f.vy[j] - vyi);

@@ -46,7 +46,7 @@ void main() {
         float r = sqrt(r2);
         float hr = h() - r;
         float p = dj.y;
-        float pterm = -dj.z * (p + p) * P.kernel.w * hr * hr / r;
+        float pterm = -dj.z * (2.0 * p * dj.w) * P.kernel.w * hr * hr / r;
         float vterm = dj.z * 0.5 * (pj.w + mui) * P.material.x * hr;
         f.x += pterm * dx + vterm * (vj.x - vi.x);
         f.y += pterm * dy + vterm * (vj.y - vi.y);
