@@ -85,7 +85,7 @@ void main() {
       float pressure = P.material.w * (rho - rho0);
       float volume = mass / rho;
       float c = (-P.kernel.w / 3.0) * (volume * fluid_moment[s] + solid_moment[s]);
-      c = clamp(c, P.correction.x, P.correction.y);
+      c = clamp(c, P.corrections.x, P.corrections.y);
       density[first + uint(s)] = vec4(rho, pressure > 0.0 ? pressure : 0.0, volume, 1.0 / c);
     }
   }

@@ -22,7 +22,7 @@ struct ParamsBlock {
   float grid_origin[4];  // origin, cell size
   std::int32_t grid_dims[4];
   std::uint32_t counts[4];  // fluid, static solids, body particles, bodies
-  float correction[4];       // clamp of the first-moment correction c: min, max (gradient_correction.hpp)
+  float corrections[4];      // clamp of the first-moment correction c: min, max; contact damping, Pa s
 };
 static_assert(sizeof(ParamsBlock) == 144);
 
@@ -360,7 +360,8 @@ void VulkanSolver::write_params(float dt) {
   std::uint32_t dynamic_bodies = 0;
   for (const RigidBody& body : m_.bodies) dynamic_bodies += body.dynamic ? 1 : 0;
   block.counts[3] = dynamic_bodies;
-  block.correction[0] = kGradientCorrectionMin, block.correction[1] = kGradientCorrectionMax;
+  block.corrections[0] = kGradientCorrectionMin, block.corrections[1] = kGradientCorrectionMax;
+  block.corrections[2] = p.contact_damping_pa_s;
   b_->params.upload(&block, sizeof block);
 }
 
