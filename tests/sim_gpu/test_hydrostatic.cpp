@@ -166,6 +166,6 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   }
   const double gradient = sdp / sdd;  // Pa/m
   std::cout << "hydrostatic: dp/dd = " << gradient << " Pa/m (rho0 g = " << rho0 * g << ")\n";
-  // Within 5% (measured +1-2% on either backend; +9% without the first-moment correction).
+  // Within 5% (measured +1-2% on either backend; +7-9% without the first-moment correction).
   EXPECT_NEAR(gradient, rho0 * g, 0.05 * rho0 * g);
 }

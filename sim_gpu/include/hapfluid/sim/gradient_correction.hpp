@@ -12,7 +12,10 @@
 // holds, and V = m / rho is ~4% small. Both volumes of the pair term carry that bias, so the
 // force a plane of fluid transmits per pascal is 0.963^2 of its area, and a column at rest
 // needs dp/dd = rho0 g / 0.963^2: the bulk pressure read 7-12% above rho0 g d (slope 10,700
-// Pa/m for 9,810).
+// Pa/m for 9,810). Ruled out as causes, measured in the settled tank: the depth reference (the
+// free surface from the fluid mass lies 1.3 mm above the top layer + s/2, ~1% at mid-depth),
+// the side walls (their vertical pair forces above and below a plane cancel) and the floor
+// (pressure forces across every horizontal plane carry 98% of the weight above it).
 //
 // The correction. c_i = tr(M_i)/3 per fluid particle, and the particle volumes of the pressure
 // force replaced by V_i / c_i, the volumes for which the gradient's first moment is exact:
