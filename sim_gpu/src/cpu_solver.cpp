@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hapfluid/sim/contact_damping.hpp"
 #include "sph_passes.hpp"
 
 namespace hapfluid::sim {
@@ -153,12 +154,13 @@ void CpuSolver::compute_body_contact_pressure(std::size_t begin, std::size_t end
 }
 
 // Forces on fluid particles (Algorithm 1, lines 4-12). With V = m / rho:
-//   pressure (eq. 5): f_p = -V_p sum_i V_i (P_p + P_i) grad W
+//   pressure (eq. 5): f_p = -(V_p / c_p) sum_i (V_i / c_i) (P_p + P_i) grad W
 //   viscosity (eqs. 6, 9): f_p = V_p sum_i V_i (mu_p + mu_i) / 2 (v_i - v_p) lap W
 // The pressure pair term is (P_p + P_i), not the paper's (P_p + P_i) / 2: with the half, the sum
 // estimates only half of grad P (sum_i V_i grad W vanishes in the bulk), and a column at rest
-// would settle at twice the hydrostatic pressure. Wall and body particles take the fluid
-// particle's own pressure (pressure mirroring, Akinci et al. 2012); walls are free-slip.
+// would settle at twice the hydrostatic pressure. c is the first-moment correction of the fluid
+// volumes (gradient_correction.hpp); wall and body particles keep their volumes (c = 1) and
+// take the fluid particle's own pressure (pressure mirroring, Akinci et al. 2012).
 void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int worker) {
   worker_max_accel_[worker] = detail::fluid_force_pass(m_.params, m_.fluid, m_.static_solids, body_view_, begin, end,
                                                        neighbour_lists_[worker], neighbour_ranges_.data());
@@ -166,7 +168,8 @@ void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int wor
 
 // Forces on the particles of dynamic bodies: from the fluid (f^haptic, eq. 8: the exact opposite
 // of each pair term the fluid particle receives above, so momentum is conserved) and from other
-// solids (contact).
+// solids (contact): contact pressure, eq. 9 with the solids' viscosities and the artificial
+// viscosity of approaching pairs (contact_damping.hpp).
 void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end) {
   const SimulationParams& p = m_.params;
   const FluidParticles& f = m_.fluid;
@@ -174,6 +177,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
   const SortedSolids& bv = body_view_;
   BodyParticles& bp = m_.body_particles;
   const KernelConstants& k = p.kernel;
+  const float damping_scale = p.contact_damping_pa_s;
   for (std::size_t i = begin; i < end; ++i) {
     const float xi = bp.x[i], yi = bp.y[i], zi = bp.z[i];
     const float vxi = bp.vx[i], vyi = bp.vy[i], vzi = bp.vz[i];
@@ -188,7 +192,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
         const float pj = f.pressure[j];
-        const float pterm = -f.volume[j] * (pj + pj) * spiky_grad_factor(k, r, hr);
+        const float pterm = -f.volume[j] * (2.0f * pj * f.volume_correction[j]) * spiky_grad_factor(k, r, hr);
         const float vterm = f.volume[j] * 0.5f * (f.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
         fx += pterm * dx + vterm * (f.vx[j] - vxi);
         fy += pterm * dy + vterm * (f.vy[j] - vyi);
@@ -206,8 +210,13 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         if (r2 >= k.h2 || r2 <= 0) continue;
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
-        const float pterm = -st.volume[j] * (pb + pb) * spiky_grad_factor(k, r, hr);
-        cx += pterm * dx, cy += pterm * dy, cz += pterm * dz;
+        const float dvx = st.vx[j] - vxi, dvy = st.vy[j] - vyi, dvz = st.vz[j] - vzi;
+        const float damping = contact_viscous_pressure(damping_scale, -(dvx * dx + dvy * dy + dvz * dz), r2, k.h2);
+        const float pterm = -st.volume[j] * (pb + pb + damping) * spiky_grad_factor(k, r, hr);
+        const float vterm = st.volume[j] * 0.5f * (st.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
+        cx += pterm * dx + vterm * dvx;
+        cy += pterm * dy + vterm * dvy;
+        cz += pterm * dz + vterm * dvz;
       }
     });
     for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
@@ -218,8 +227,13 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
         if (r2 >= k.h2 || r2 <= 0) continue;
         const float r = std::sqrt(r2);
         const float hr = k.h - r;
-        const float pterm = -bv.volume[j] * (pb + bv.pressure[j]) * spiky_grad_factor(k, r, hr);
-        cx += pterm * dx, cy += pterm * dy, cz += pterm * dz;
+        const float dvx = bv.vx[j] - vxi, dvy = bv.vy[j] - vyi, dvz = bv.vz[j] - vzi;
+        const float damping = contact_viscous_pressure(damping_scale, -(dvx * dx + dvy * dy + dvz * dz), r2, k.h2);
+        const float pterm = -bv.volume[j] * (pb + bv.pressure[j] + damping) * spiky_grad_factor(k, r, hr);
+        const float vterm = bv.volume[j] * 0.5f * (bv.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
+        cx += pterm * dx + vterm * dvx;
+        cy += pterm * dy + vterm * dvy;
+        cz += pterm * dz + vterm * dvz;
       }
     });
     bp.cx[i] = cx * vol;

@@ -14,11 +14,13 @@ void apply(std::vector<T>& values, const std::vector<std::uint32_t>& order, std:
 
 void FluidParticles::resize(std::size_t n) {
   for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &ax, &ay, &az, &density, &pressure, &volume, &viscosity}) v->resize(n, 0.0f);
+  volume_correction.resize(n, 1.0f);
   id.resize(n, 0);
 }
 
 void FluidParticles::permute(const std::vector<std::uint32_t>& order) {
-  // Density, pressure and volume are recomputed after the sort, so only state is moved.
+  // Density, pressure, volume and volume correction are recomputed after the sort, so only
+  // state is moved.
   for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &ax, &ay, &az, &viscosity}) apply(*v, order, scratch_f_);
   apply(id, order, scratch_u_);
 }

@@ -7,6 +7,7 @@
 
 #include "hapfluid/config/mesh.hpp"
 #include "hapfluid/sim/boundary.hpp"
+#include "hapfluid/sim/contact_damping.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
 #include "hapfluid/sim/model.hpp"
 
@@ -123,6 +124,7 @@ SimulationModel build_model(const config::Scene& scene) {
   p.rest_density_kg_m3 = static_cast<float>(scene.fluid.rest_density_kg_m3);
   p.stiffness = static_cast<float>(scene.fluid.effective_stiffness());
   p.speed_of_sound_m_s = std::sqrt(p.stiffness);
+  p.contact_damping_pa_s = static_cast<float>(contact_damping_scale(p.rest_density_kg_m3, p.speed_of_sound_m_s, h));
   p.particle_spacing_m = static_cast<float>(s);
   p.fluid_particle_mass_kg = static_cast<float>(lattice_particle_mass(scene.fluid.rest_density_kg_m3, s, h));
   p.fluid_viscosity_pa_s = static_cast<float>(scene.fluid.viscosity_pa_s);

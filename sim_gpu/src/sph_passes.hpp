@@ -16,13 +16,14 @@
 
 namespace hapfluid::sim::detail {
 
-// Eq. 2 with the boundary contribution rho0 V_b W, then eq. 7 (clamped at zero) and V = m / rho;
-// fills the neighbour lists of [begin, end).
+// Eq. 2 with the boundary contribution rho0 V_b W, then eq. 7 (clamped at zero), V = m / rho and
+// the volume correction 1 / c (gradient_correction.hpp); fills the neighbour lists of [begin, end).
 void density_pass(const SimulationParams& p, FluidParticles& f, const std::uint32_t* fluid_cell_start,
                   const SortedSolids& statics, const SortedSolids& bodies, std::size_t begin, std::size_t end,
                   NeighbourLists& lists, NeighbourRange* ranges);
 
-// Pressure (eq. 5) and viscosity (eqs. 6, 9) accelerations plus gravity over the neighbour lists;
+// Pressure (eq. 5, pair terms scaled by 1 / (c_i c_j)) and viscosity (eqs. 6, 9) accelerations
+// plus gravity over the neighbour lists;
 // returns the largest squared acceleration of the range.
 float fluid_force_pass(const SimulationParams& p, FluidParticles& f, const SortedSolids& statics,
                        const SortedSolids& bodies, std::size_t begin, std::size_t end, const NeighbourLists& lists,

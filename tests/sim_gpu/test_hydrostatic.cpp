@@ -47,6 +47,43 @@ Profile pressure_profile(const CpuSolver& solver, const config::Scene& scene) {
   return out;
 }
 
+// Mean first moment of the pressure gradient over the bulk, tr(M_i)/3 with
+// M_i = -sum_j V_j grad W_ij (x) r_ij over fluid and wall neighbours (1 for an exact gradient
+// of a linear field): with the plain volumes V = m / rho and with the corrected volumes of the
+// pressure force (V * volume_correction, gradient_correction.hpp; walls keep theirs).
+struct FirstMoment {
+  double plain = 0, corrected = 0;
+};
+FirstMoment bulk_first_moment(const CpuSolver& solver, double surface) {
+  const auto& f = solver.model().fluid;
+  const auto& st = solver.model().static_solids;
+  const KernelConstants& k = solver.params().kernel;
+  const float* lo = solver.params().box_lo;
+  const float* hi = solver.params().box_hi;
+  const double h = k.h;
+  FirstMoment sum;
+  int n = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (f.x[i] < lo[0] + h || f.x[i] > hi[0] - h || f.y[i] < lo[1] + h || f.y[i] > hi[1] - h || f.z[i] > surface - h)
+      continue;
+    double plain = 0, corrected = 0;
+    auto add = [&](double dx, double dy, double dz, double volume, double correction) {
+      const double r = std::sqrt(dx * dx + dy * dy + dz * dz);
+      if (r >= h || r <= 0) return;
+      const double moment = -spiky_grad_over_r(k, static_cast<float>(r)) * r * r / 3;  // -(r . grad W) / 3
+      plain += volume * moment;
+      corrected += volume * correction * moment;
+    };
+    for (std::size_t j = 0; j < f.size(); ++j)
+      add(f.x[i] - f.x[j], f.y[i] - f.y[j], f.z[i] - f.z[j], f.volume[j], f.volume_correction[j]);
+    for (std::size_t j = 0; j < st.size(); ++j) add(f.x[i] - st.x[j], f.y[i] - st.y[j], f.z[i] - st.z[j], st.volume[j], 1.0);
+    sum.plain += plain;
+    sum.corrected += corrected;
+    ++n;
+  }
+  return {sum.plain / n, sum.corrected / n};
+}
+
 }  // namespace
 
 TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
@@ -73,6 +110,19 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   }
   const double ke_late = test::fluid_kinetic_energy(solver);
 
+  // The pressure gradient is exact to first order in the settled (disordered) bulk: the first
+  // moment of the kernel gradient over the pressure force's volumes is the identity. With the
+  // plain volumes m / rho it falls ~4% short (the poly6 density over-counts the relaxed packing),
+  // which made the column's pressure gradient ~8% steep (gradient_correction.hpp).
+  {
+    std::vector<float> z(f.z.begin(), f.z.end());
+    std::sort(z.begin(), z.end());
+    const FirstMoment m = bulk_first_moment(solver, z[z.size() - 50]);
+    std::cout << "hydrostatic: bulk first moment tr(M)/3 " << m.plain << " with V = m / rho, " << m.corrected
+              << " with the corrected volumes\n";
+    EXPECT_NEAR(m.corrected, 1.0, 0.01);
+  }
+
   // Kinetic energy decays: the start-up motion (the column settling onto the floor) is damped
   // to a residual jitter of a few mm/s (J; 2 kg of water at 1 cm/s is 1e-4 J).
   EXPECT_LT(ke_late, 0.2 * ke_start) << "start " << ke_start << " J, late " << ke_late << " J";
@@ -96,14 +146,17 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   const double g = 9.81, rho0 = scene.fluid.rest_density_kg_m3;
   const std::size_t bands = mean.depth_m.size();
   ASSERT_GE(bands, 5u);
+  double worst = 0;
   for (std::size_t b = 0; b < bands; ++b) {
     const double expected = rho0 * g * mean.depth_m[b];  // Pa
-    // Within 15% pointwise: the top-layer convention for the surface is itself uncertain by a
-    // fraction of a spacing, and the spiky gradient on the relaxed (non-lattice) particle
-    // arrangement reads a few % steep (measured 7-12% above rho0 g d).
-    EXPECT_NEAR(mean.pressure_pa[b], expected, 0.15 * expected) << "depth " << mean.depth_m[b] << " m";
+    // Issue 3: within 10% of rho0 g d pointwise in the bulk. The top-layer convention for the
+    // surface is itself uncertain by a fraction of a spacing (a few % at the shallowest band).
+    // Without the first-moment correction of the pressure force the relaxed bulk read 7-12% high.
+    EXPECT_NEAR(mean.pressure_pa[b], expected, 0.10 * expected) << "depth " << mean.depth_m[b] << " m";
+    worst = std::max(worst, std::abs(mean.pressure_pa[b] / expected - 1));
   }
-  // The hydrostatic law itself, dp/dd = rho0 g, within 10% (least squares over the bands).
+  std::cout << "hydrostatic: worst bulk band " << 100 * worst << " % from rho0 g d\n";
+  // The hydrostatic law itself, dp/dd = rho0 g (least squares over the bands).
   double md = 0, mp = 0;
   for (std::size_t b = 0; b < bands; ++b) md += mean.depth_m[b] / bands, mp += mean.pressure_pa[b] / bands;
   double sdd = 0, sdp = 0;
@@ -113,5 +166,6 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   }
   const double gradient = sdp / sdd;  // Pa/m
   std::cout << "hydrostatic: dp/dd = " << gradient << " Pa/m (rho0 g = " << rho0 * g << ")\n";
-  EXPECT_NEAR(gradient, rho0 * g, 0.10 * rho0 * g);
+  // Within 5% (measured +1-2% on either backend; +7-9% without the first-moment correction).
+  EXPECT_NEAR(gradient, rho0 * g, 0.05 * rho0 * g);
 }

@@ -5,7 +5,9 @@
 
 #include <cmath>
 
+#include "hapfluid/sim/gradient_correction.hpp"
 #include "hapfluid/sim/kernels.hpp"
+#include "hapfluid/sim/model.hpp"
 
 using namespace hapfluid::sim;
 
@@ -65,4 +67,39 @@ TEST(Kernels, ViscosityLaplacianMatchesFiniteDifferences) {
     EXPECT_NEAR(viscosity_laplacian_d(r, h), lap, 1e-3 * std::abs(lap)) << "r = " << r;
     EXPECT_NEAR(viscosity_laplacian(k, static_cast<float>(r)), lap, 1e-3 * std::abs(lap)) << "r = " << r;
   }
+}
+
+TEST(GradientCorrection, FirstMomentKernelIntegratesToOne) {
+  // Wm(r) = -r W'(r) / 3 of the spiky kernel is what tr(M)/3 sums (gradient_correction.hpp);
+  // it is a number-density estimate only if it integrates to one like W.
+  for (double h : {0.01, 0.02, 0.1})
+    EXPECT_NEAR(radial_integral([&](double r) { return -r * spiky_grad_d(r, h) / 3; }, h), 1.0, 1e-6) << "h = " << h;
+}
+
+TEST(GradientCorrection, GivesTheLatticeCellVolumeOnTheRestLatticeAndIsClampedAtAFreeSurface) {
+  // On the rest lattice the particle mass makes eq. 2 read rho0, so V = m / rho0; but the poly6
+  // sum's self term makes that 1% less than the cell a particle fills, s^3. The corrected volume
+  // V / c of the pressure force must be exactly s^3 (the spiky gradient is scaled to an exact
+  // first moment with s^3, scene_setup.cpp). Half a lattice (a free surface through the
+  // particle) would read c ~ 0.5; the clamp keeps such particles from being pushed 2x harder.
+  const double s = 0.01, h = 2 * s, rho0 = 1000;
+  KernelConstants k = make_kernel_constants(h);
+  k.spiky_grad = static_cast<float>(k.spiky_grad / lattice_gradient_moment(s, h));
+  const float volume = static_cast<float>(lattice_particle_mass(rho0, s, h) / rho0);
+  EXPECT_NEAR(volume, s * s * s, 0.011 * s * s * s);  // m^3: 0.99 s^3 at h = 2 spacings
+  float full = 0, lower_half = 0;
+  for (int i = -2; i <= 2; ++i)
+    for (int j = -2; j <= 2; ++j)
+      for (int l = -2; l <= 2; ++l) {
+        const float r = static_cast<float>(s * std::sqrt(double(i * i + j * j + l * l)));
+        if (r >= k.h) continue;
+        full += moment_shape(r, k.h - r);
+        if (l <= 0) lower_half += moment_shape(r, k.h - r);
+      }
+  EXPECT_NEAR(volume / gradient_correction(k, volume, full, 0.0f), s * s * s, 1e-5 * s * s * s);
+  // The same lattice seen half as fluid and half as wall particles of the same volume.
+  const float c = gradient_correction(k, volume, full, 0.0f);
+  EXPECT_FLOAT_EQ(gradient_correction(k, volume, lower_half, volume * (full - lower_half)), c);
+  EXPECT_EQ(gradient_correction(k, volume, lower_half, 0.0f), kGradientCorrectionMin);
+  EXPECT_EQ(gradient_correction(k, volume, 3 * full, 0.0f), kGradientCorrectionMax);
 }

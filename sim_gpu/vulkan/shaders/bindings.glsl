@@ -15,7 +15,7 @@
 #define BINDING_S_POS 4         // vec4 (x, y, z, viscosity), cell-sorted
 #define BINDING_S_VEL 5         // vec4 (vx, vy, vz, 0)
 #define BINDING_S_ID 6          // uint
-#define BINDING_S_DENSITY 7     // vec4 (density, pressure, volume, 0)
+#define BINDING_S_DENSITY 7     // vec4 (density, pressure, volume, volume correction 1 / c)
 #define BINDING_S_ACC 8         // vec4 (ax, ay, az, 0): acceleration of this step
 #define BINDING_CELL_COUNT 9    // uint per cell: fluid cells, then body cells
 #define BINDING_CELL_START 10   // uint: fluid cells + 1, then body cells + 1

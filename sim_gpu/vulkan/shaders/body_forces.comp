@@ -2,7 +2,9 @@
 #extension GL_GOOGLE_include_directive : require
 // Forces on dynamic body particles (CpuSolver::compute_body_particle_forces): from the fluid
 // (f^haptic, eq. 8: the exact opposite of each pair term the fluid particle receives, so
-// momentum is conserved; the body's viscosity enters eq. 9) and from other solids (contact).
+// momentum is conserved; the body's viscosity enters eq. 9) and from other solids (contact:
+// contact pressure, eq. 9 with both solids' viscosities, and the artificial viscosity of
+// approaching pairs, contact_damping.hpp).
 // One invocation per body particle in body order, so the per-body sums read contiguous ranges.
 #include "common.glsl"
 layout(local_size_x = 64) in;
@@ -11,8 +13,10 @@ layout(binding = BINDING_T_S_VEL) uniform samplerBuffer s_vel;
 layout(binding = BINDING_T_S_DENSITY) uniform samplerBuffer s_density;
 layout(binding = BINDING_T_CELL_START) uniform usamplerBuffer cell_start;
 layout(binding = BINDING_T_W_A) uniform samplerBuffer w_a;
+layout(binding = BINDING_T_W_B) uniform samplerBuffer w_b;
 layout(binding = BINDING_T_W_CELL_START) uniform usamplerBuffer w_cell_start;
 layout(binding = BINDING_T_V_A) uniform samplerBuffer v_a;
+layout(binding = BINDING_T_V_B) uniform samplerBuffer v_b;
 layout(binding = BINDING_T_V_C) uniform samplerBuffer v_c;
 layout(binding = BINDING_T_V_CELL_START) uniform usamplerBuffer v_cell_start;
 layout(std430, binding = BINDING_B_POS) readonly buffer BPos { vec4 b_pos[]; };
@@ -21,6 +25,12 @@ layout(std430, binding = BINDING_B_REST) readonly buffer BRest { vec4 b_rest[]; 
 layout(std430, binding = BINDING_B_PRESSURE) readonly buffer BPressure { float b_pressure[]; };
 layout(std430, binding = BINDING_B_FORCE) writeonly buffer BForce { vec4 b_force[]; };
 layout(std430, binding = BINDING_B_CONTACT) writeonly buffer BContact { vec4 b_contact[]; };
+
+// contact_viscous_pressure of contact_damping.hpp: Monaghan's Pi_ij while the pair approaches
+// (v_dot_r = (v_i - v_j) . (x_i - x_j) < 0), Pa.
+float contact_viscous_pressure(float v_dot_r, float r2) {
+  return v_dot_r < 0.0 ? P.corrections.z * -v_dot_r / (r2 + 0.01 * h2()) : 0.0;
+}
 
 void main() {
   uint i = gl_GlobalInvocationID.x;
@@ -46,7 +56,7 @@ void main() {
         float r = sqrt(r2);
         float hr = h() - r;
         float p = dj.y;
-        float pterm = -dj.z * (p + p) * P.kernel.w * hr * hr / r;
+        float pterm = -dj.z * (2.0 * p * dj.w) * P.kernel.w * hr * hr / r;
         float vterm = dj.z * 0.5 * (pj.w + mui) * P.material.x * hr;
         f.x += pterm * dx + vterm * (vj.x - vi.x);
         f.y += pterm * dy + vterm * (vj.y - vi.y);
@@ -65,8 +75,14 @@ void main() {
         if (r2 >= h2() || r2 <= 0.0) continue;
         float r = sqrt(r2);
         float hr = h() - r;
-        float pterm = -pj.w * (pb + pb) * P.kernel.w * hr * hr / r;
-        c.x += pterm * dx; c.y += pterm * dy; c.z += pterm * dz;
+        vec4 vj = texelFetch(w_b, int(j));
+        float dvx = vj.x - vi.x, dvy = vj.y - vi.y, dvz = vj.z - vi.z;
+        float damping = contact_viscous_pressure(-(dvx * dx + dvy * dy + dvz * dz), r2);
+        float pterm = -pj.w * (pb + pb + damping) * P.kernel.w * hr * hr / r;
+        float vterm = pj.w * 0.5 * (vj.w + mui) * P.material.x * hr;
+        c.x += pterm * dx + vterm * dvx;
+        c.y += pterm * dy + vterm * dvy;
+        c.z += pterm * dz + vterm * dvz;
       }
     }
   }
@@ -82,8 +98,14 @@ void main() {
         if (r2 >= h2() || r2 <= 0.0) continue;
         float r = sqrt(r2);
         float hr = h() - r;
-        float pterm = -pj.w * (pb + b_pressure[uint(cj.z)]) * P.kernel.w * hr * hr / r;
-        c.x += pterm * dx; c.y += pterm * dy; c.z += pterm * dz;
+        vec4 vj = texelFetch(v_b, int(j));
+        float dvx = vj.x - vi.x, dvy = vj.y - vi.y, dvz = vj.z - vi.z;
+        float damping = contact_viscous_pressure(-(dvx * dx + dvy * dy + dvz * dz), r2);
+        float pterm = -pj.w * (pb + b_pressure[uint(cj.z)] + damping) * P.kernel.w * hr * hr / r;
+        float vterm = pj.w * 0.5 * (vj.w + mui) * P.material.x * hr;
+        c.x += pterm * dx + vterm * dvx;
+        c.y += pterm * dy + vterm * dvy;
+        c.z += pterm * dz + vterm * dvz;
       }
     }
   }

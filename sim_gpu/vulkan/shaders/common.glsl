@@ -13,6 +13,9 @@ layout(std140, set = 0, binding = BINDING_PARAMS) uniform Params {
   vec4 grid_origin;   // min corner (m), cell size (m)
   ivec4 grid_dims;    // cells along x, y, z; cell count
   uvec4 counts;       // fluid, static solid, dynamic body particles; dynamic bodies
+  vec4 corrections;   // clamp of the pressure force's first-moment correction c: min, max
+                      // (gradient_correction.hpp); contact damping alpha rho0 c h, Pa s
+                      // (contact_damping.hpp); unused
 } P;
 
 float h() { return P.kernel.x; }

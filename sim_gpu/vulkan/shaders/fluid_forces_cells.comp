@@ -2,10 +2,11 @@
 #extension GL_GOOGLE_include_directive : require
 // Forces on fluid particles (Algorithm 1, lines 4-12) per cell (cell_group.glsl), as
 // acceleration a = f / m = sum / rho:
-//   pressure (eq. 5):        -V_p sum_i V_i (P_p + P_i) grad W
+//   pressure (eq. 5):        -(V_p / c_p) sum_i (V_i / c_i) (P_p + P_i) grad W
 //   viscosity (eqs. 6, 9):    V_p sum_i V_i (mu_p + mu_i) / 2 (v_i - v_p) lap W
-// Wall and body particles take the fluid particle's own pressure (pressure mirroring, Akinci
-// et al. 2012). The terms of CpuSolver::compute_fluid_forces, per particle in the same order
+// with the first-moment volume correction 1 / c (density.w, gradient_correction.hpp). Wall and
+// body particles keep their volumes (c = 1) and take the fluid particle's own pressure
+// (pressure mirroring, Akinci et al. 2012). The terms of CpuSolver::compute_fluid_forces, per particle in the same order
 // (fluid runs, walls, bodies; candidate by candidate), with each neighbour's data fetched once
 // for all particles of the cell; velocity and density only when one of them is in range.
 #include "common.glsl"
@@ -24,7 +25,7 @@ layout(binding = BINDING_T_V_CELL_START) uniform usamplerBuffer v_cell_start;
 layout(std430, binding = BINDING_S_ACC) writeonly buffer Acc { vec4 acc[]; };
 
 vec3 xs[CELL_GROUP], vs[CELL_GROUP], as[CELL_GROUP];
-float ps[CELL_GROUP], mus[CELL_GROUP];
+float ps[CELL_GROUP], vcs[CELL_GROUP], mus[CELL_GROUP];
 
 void fluid_run(uint b, uint e) {
   for (uint j = b; j < e; ++j) {
@@ -44,7 +45,7 @@ void fluid_run(uint b, uint e) {
       if (r2 >= h2() || r2 <= 0.0) continue;
       float r = sqrt(r2);
       float hr = h() - r;
-      float pterm = -dj.z * (ps[s] + dj.y) * P.kernel.w * hr * hr / r;
+      float pterm = -dj.z * (ps[s] + dj.y) * (vcs[s] * dj.w) * P.kernel.w * hr * hr / r;
       float vterm = dj.z * 0.5 * (mus[s] + pj.w) * P.material.x * hr;
       as[s].x += pterm * dx + vterm * (vj.x - vs[s].x);
       as[s].y += pterm * dy + vterm * (vj.y - vs[s].y);
@@ -73,7 +74,7 @@ void solid_run(samplerBuffer sa, samplerBuffer sb, bool have_c, samplerBuffer sc
       if (r2 >= h2() || r2 <= 0.0) continue;
       float r = sqrt(r2);
       float hr = h() - r;
-      float pterm = -pj.w * (ps[s] + ps[s]) * P.kernel.w * hr * hr / r;
+      float pterm = -pj.w * (2.0 * ps[s] * vcs[s]) * P.kernel.w * hr * hr / r;
       float vterm = pj.w * 0.5 * (mus[s] + vj.w) * P.material.x * hr;
       float dvx = vj.x - vs[s].x, dvy = vj.y - vs[s].y, dvz = vj.z - vs[s].z;
       float along = (1.0 - ns) * (dvx * dx + dvy * dy + dvz * dz) / r2;
@@ -103,6 +104,7 @@ void main() {
       mus[s] = p4.w;
       vs[s] = texelFetch(s_vel, i).xyz;
       ps[s] = d4.y;
+      vcs[s] = d4.w;
       inv_rho[s] = 1.0 / d4.x;
       as[s] = vec3(0.0);
     }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "../shaders/bindings.glsl"
+#include "hapfluid/sim/gradient_correction.hpp"
 
 namespace hapfluid::sim::vulkan {
 namespace {
@@ -21,8 +22,9 @@ struct ParamsBlock {
   float grid_origin[4];  // origin, cell size
   std::int32_t grid_dims[4];
   std::uint32_t counts[4];  // fluid, static solids, body particles, bodies
+  float corrections[4];      // clamp of the first-moment correction c: min, max; contact damping, Pa s
 };
-static_assert(sizeof(ParamsBlock) == 128);
+static_assert(sizeof(ParamsBlock) == 144);
 
 constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 constexpr VkBufferUsageFlags kTexel = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
@@ -261,7 +263,8 @@ void VulkanSolver::upload_model() {
   b.f_id.upload(f.id.data(), 4 * nf);
   // Accelerations of the initial state enter the first CFL bound; S_ACC holds them.
   b.s_acc.upload(pack4(nf, f.ax.data(), f.ay.data(), f.az.data(), nullptr).data(), 16 * nf);
-  b.s_density.upload(pack4(nf, f.density.data(), f.pressure.data(), f.volume.data(), nullptr).data(), 16 * nf);
+  b.s_density.upload(pack4(nf, f.density.data(), f.pressure.data(), f.volume.data(), f.volume_correction.data()).data(),
+                     16 * nf);
   const std::vector<std::uint32_t> zeros(std::max<std::size_t>(body_start_base_ + cell_count_ + 1, 4 + 2 * max_groups_), 0);
   b.reduce.upload(zeros.data(), 4 * (4 + 2 * max_groups_));  // the clamp counter starts at zero
   b.cell_count.upload(zeros.data(), 4 * 2 * cell_count_);
@@ -357,6 +360,8 @@ void VulkanSolver::write_params(float dt) {
   std::uint32_t dynamic_bodies = 0;
   for (const RigidBody& body : m_.bodies) dynamic_bodies += body.dynamic ? 1 : 0;
   block.counts[3] = dynamic_bodies;
+  block.corrections[0] = kGradientCorrectionMin, block.corrections[1] = kGradientCorrectionMax;
+  block.corrections[2] = p.contact_damping_pa_s;
   b_->params.upload(&block, sizeof block);
 }
 
@@ -531,6 +536,7 @@ void VulkanSolver::sync_particles() {
     f.vx[i] = vel[4 * i], f.vy[i] = vel[4 * i + 1], f.vz[i] = vel[4 * i + 2];
     f.ax[i] = acc[4 * i], f.ay[i] = acc[4 * i + 1], f.az[i] = acc[4 * i + 2];
     f.density[i] = density[4 * i], f.pressure[i] = density[4 * i + 1], f.volume[i] = density[4 * i + 2];
+    f.volume_correction[i] = density[4 * i + 3];
   }
   BodyParticles& bp = m_.body_particles;
   const std::size_t nb = body_particle_count_;

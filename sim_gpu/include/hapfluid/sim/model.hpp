@@ -21,6 +21,7 @@ struct SimulationParams {
   float rest_density_kg_m3 = 1000;
   float stiffness = 0;            // k of eq. 7 (= c^2), m^2/s^2
   float speed_of_sound_m_s = 0;   // sqrt(k), for the CFL bound
+  float contact_damping_pa_s = 0; // alpha rho0 c h of the contact artificial viscosity (contact_damping.hpp)
   float fluid_particle_mass_kg = 0;
   float particle_spacing_m = 0;
   float fluid_viscosity_pa_s = 0;

@@ -1,6 +1,6 @@
 // Per-particle neighbour lists of the CPU backend: the density pass keeps the candidates within
-// h of each fluid particle (fluid, then static solids, then dynamic body particles) so the force
-// pass visits only true neighbours. One buffer per worker thread.
+// h of each fluid particle (fluid, then static solids, then dynamic body particles) and their
+// distances, so the force pass visits only true neighbours. One buffer per worker thread.
 #pragma once
 
 #include <cstddef>
@@ -18,6 +18,9 @@ struct NeighbourRange {
 
 struct NeighbourLists {
   std::vector<std::uint32_t> indices;
+  // |x_i - x_j| of each listed pair, written by the density pass (its first-moment sum needs it)
+  // and read by the force pass over the same positions: one square root per pair and step.
+  std::vector<float> distances;
   std::size_t used = 0;
 };
 

@@ -29,6 +29,9 @@ struct FluidParticles {
   std::vector<float> density;     // eq. 2, kg/m^3
   std::vector<float> pressure;    // eq. 7, Pa
   std::vector<float> volume;      // m / density, m^3
+  // 1 / c of gradient_correction.hpp: the pressure force (eq. 5) takes the particle's volume as
+  // volume * volume_correction (1 on the rest lattice).
+  std::vector<float> volume_correction;
   std::vector<float> viscosity;   // per-particle mu, Pa s (eq. 9)
   std::vector<std::uint32_t> id;  // creation index, unchanged by sorting
 
