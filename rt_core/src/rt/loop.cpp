@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "hapfluid/wire/codec.h"
+
 namespace hapfluid::rt {
 namespace {
 
@@ -152,6 +154,12 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   safety::to(out.wrench.torque_nm, d.command.torque_nm);
   d.command.enable = out.enable;
   d.command.estop = out.estop;
+  // A latched command-watchdog trip, and nothing else, is the device's answer to our own silence
+  // (a link loss longer than device_watchdog_ms, a stalled loop). Once its frames flow again we
+  // clear it, which the device honours only while disabled, so clearing never switches force on:
+  // the safety layer's link recovery and engage gate decide when the wrench returns (issue 8).
+  // Every other device fault (e-stop, over-current, workspace, bad commands) stays latched.
+  d.command.clear_faults = !out.enable && !out.estop && d.fresh && valid && d.state.fault == HF_FAULT_COMMAND_WATCHDOG;
   d.scene_wrench = d.workspace.to_scene(out.wrench);
 
   auto& entry = states_record_.devices[index];
