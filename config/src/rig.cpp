@@ -130,6 +130,8 @@ RtSettings read_rt(Reader& r) {
   RtSettings rt;
   rt.period_ns = r.integer("period_ns", rt.period_ns);
   r.check("period_ns", rt.period_ns >= 100'000 && rt.period_ns <= 100'000'000, "must be 100000..100000000 (0.1-100 ms)");
+  rt.wake_phase_ns = r.integer("wake_phase_ns", rt.period_ns / 4);
+  r.check("wake_phase_ns", rt.wake_phase_ns >= 0 && rt.wake_phase_ns < rt.period_ns, "must be 0 <= wake_phase_ns < period_ns");
   rt.priority = static_cast<int>(r.integer("priority", rt.priority));
   r.check("priority", rt.priority >= 1 && rt.priority <= 99, "must be a SCHED_FIFO priority 1..99");
   rt.cpu = static_cast<int>(r.integer("cpu", rt.cpu));

@@ -97,6 +97,10 @@ struct RtSettings {
   std::int64_t period_ns = 1'000'000;
   int priority = 80;               // SCHED_FIFO priority 1..99
   int cpu = -1;                    // CPU to pin the loop to; -1: no pinning
+  // Where in each period the loop wakes, from whole multiples of period_ns on CLOCK_MONOTONIC.
+  // Not 0: the kernel's scheduler tick fires on those multiples (all CPUs), and a wake-up that
+  // coincides with it waits behind the tick's work (docs/rig-setup.md). Default period_ns / 4.
+  std::int64_t wake_phase_ns = 250'000;
   RtPolicy policy = RtPolicy::ignore;
   SharedMemory shm;
   std::uint32_t trace_ring_records = 65536;  // power of two
