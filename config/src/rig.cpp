@@ -78,6 +78,8 @@ void read_watchdogs(Reader& r, Watchdogs& w) {
   w.engage_threshold_nm = r.number("engage_threshold_nm", 0.0);
   r.check("engage_threshold_nm", w.engage_threshold_nm >= 0, "must be >= 0 (0: derived from engage_threshold_n)");
   r.positive("engage_ramp_ms", w.engage_ramp_ms);
+  w.engage_small_ms = r.number("engage_small_ms", w.engage_small_ms);
+  r.check("engage_small_ms", w.engage_small_ms >= 0, "must be >= 0 (0: a small command engages at once)");
   w.engage_hold_ms = r.number("engage_hold_ms", w.engage_hold_ms);
   r.check("engage_hold_ms", w.engage_hold_ms >= 0, "must be >= 0 (0: only a small command engages)");
   r.positive("engage_steady_band_n", w.engage_steady_band_n);

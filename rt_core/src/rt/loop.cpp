@@ -100,7 +100,10 @@ void RtLoop::read_sim(std::uint64_t now, std::uint32_t& loop_flags) {
   bool restarted = incarnation != sample_incarnation_;
   if (!restarted && generation == sample_generation_) return;
   if (restarted)
-    for (auto& d : devices_) d->interpolator.reset();
+    for (auto& d : devices_) {
+      d->interpolator.reset();
+      d->sim_restarted = true;
+    }
   sample_ = scratch_;
   sample_generation_ = generation;
   sample_incarnation_ = incarnation;
@@ -147,6 +150,8 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
   in.sim_age_ms = sim_age_ms(now);
+  in.sim_restarted = d.sim_restarted;
+  d.sim_restarted = false;
   safety::SafetyOutput out = d.safety.step(in);
   if (capped) out.flags |= safety::flag_stiffness_capped;
 

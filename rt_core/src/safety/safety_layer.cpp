@@ -30,7 +30,15 @@ void SafetyLayer::update_link(const SafetyInput& in) {
 
 bool SafetyLayer::may_engage(const Wrench& command, std::uint32_t limit_flags, std::uint64_t now_ns) {
   const double force_n = norm(command.force_n), torque_nm = norm(command.torque_nm);
-  const bool small = force_n < config_.engage_threshold_n && torque_nm < config_.engage_threshold_nm;
+  // Small, and small for engage_small_ms: a ringing spring passes through zero, it does not stay there.
+  bool small = force_n < config_.engage_threshold_n && torque_nm < config_.engage_threshold_nm;
+  if (!small) {
+    small_window_open_ = false;
+  } else if (!small_window_open_) {
+    small_window_open_ = true;
+    small_since_ns_ = now_ns;
+  }
+  small = small && double(now_ns - small_since_ns_) >= config_.engage_small_ms * kNsPerMs;
   // Steady: within the band of one reference value for the whole hold window. The reference is
   // the first value of the window, so a slow drift leaves the band too (it is not "steady"), and
   // an oscillation wider than the band restarts the window at every excursion.
@@ -48,13 +56,13 @@ bool SafetyLayer::may_engage(const Wrench& command, std::uint32_t limit_flags, s
     }
     steady = double(now_ns - steady_since_ns_) >= config_.engage_hold_ms * kNsPerMs;
   } else {
-    restart_steady_window();  // a limited (saturated) or non-finite command is not a resting load
+    steady_window_open_ = false;  // a limited (saturated) or non-finite command is not a resting load
   }
   if (!small && !steady) return false;
   // Longer for a larger load, so the rise stays at or below engage_ramp_rate (rate limit untouched).
   engage_ramp_ms_ = std::max({config_.engage_ramp_ms, force_n / config_.engage_ramp_rate_n_per_s * 1e3,
                               torque_nm / config_.engage_ramp_rate_nm_per_s * 1e3});
-  restart_steady_window();
+  restart_engage_windows();
   return true;
 }
 
@@ -105,19 +113,19 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   if (deadman_released) out.flags |= flag_deadman_released;
   bool hard_zero = (faults_ & ~fault_sim_stale) != 0 || deadman_released;
 
-  // 5: engage. A stale ramp that reached zero counts as a zero: the sim that comes back (perhaps
-  // a restarted one, its body far from the hand) must pass the same gate.
-  if (hard_zero || stale_scale_ <= 0) {
+  // 5: engage. A restarted sim's state is new (its body perhaps far from the hand): like after a
+  // hard zero, its wrench must pass the gate.
+  if (hard_zero || in.sim_restarted) {
     engage_ = Engage::disengaged;
     engage_scale_ = 0;
-    restart_steady_window();
+    restart_engage_windows();
   }
   if (engage_ == Engage::disengaged && !hard_zero) {
     if (!stale && may_engage(limited, out.flags, in.now_ns)) {
       engage_ = Engage::ramping;
     } else {
       out.flags |= flag_waiting_to_engage;
-      if (stale) restart_steady_window();
+      if (stale) restart_engage_windows();
     }
   }
   if (engage_ == Engage::ramping) {

@@ -56,6 +56,7 @@ struct Watchdogs {
   double engage_threshold_n = 1.0;   // forces engage only once the commanded force is below this
   double engage_threshold_nm = 0.0;  // ... and the torque below this; 0: threshold_n * max_torque / max_force
   double engage_ramp_ms = 200.0;     // then ramp in over this long
+  double engage_small_ms = 50.0;     // "below": for this long (a ringing spring only crosses zero); 0: at once
   // Engaging under a resting load (a held bucket's weight never drops below the threshold): a
   // command that stayed within +/- engage_steady_band_n (and _nm) for engage_hold_ms, within the
   // limits, engages too. 0 ms: off. 0 for the _nm band/rate: derived like engage_threshold_nm.

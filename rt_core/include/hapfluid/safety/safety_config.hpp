@@ -30,6 +30,7 @@ struct SafetyConfig {
   // engage_hold_ms (and within the limits) may engage too; 0 ms turns this rule off. The ramp from
   // zero then lasts max(engage_ramp_ms, |F| / engage_ramp_rate_n_per_s, |tau| / ..._nm_per_s).
   double engage_hold_ms = 150.0;
+  double engage_small_ms = 50.0;  // a small command must stay small this long (0: at once)
   double engage_steady_band_n = 0.5;
   double engage_steady_band_nm = 0.025;
   double engage_ramp_rate_n_per_s = 20.0;
