@@ -78,6 +78,17 @@ void read_watchdogs(Reader& r, Watchdogs& w) {
   w.engage_threshold_nm = r.number("engage_threshold_nm", 0.0);
   r.check("engage_threshold_nm", w.engage_threshold_nm >= 0, "must be >= 0 (0: derived from engage_threshold_n)");
   r.positive("engage_ramp_ms", w.engage_ramp_ms);
+  w.engage_small_ms = r.number("engage_small_ms", w.engage_small_ms);
+  r.check("engage_small_ms", w.engage_small_ms >= 0, "must be >= 0 (0: a small command engages at once)");
+  w.engage_hold_ms = r.number("engage_hold_ms", w.engage_hold_ms);
+  r.check("engage_hold_ms", w.engage_hold_ms >= 0, "must be >= 0 (0: only a small command engages)");
+  r.positive("engage_steady_band_n", w.engage_steady_band_n);
+  w.engage_steady_band_nm = r.number("engage_steady_band_nm", 0.0);
+  r.check("engage_steady_band_nm", w.engage_steady_band_nm >= 0, "must be >= 0 (0: derived from engage_steady_band_n)");
+  r.positive("engage_ramp_rate_n_per_s", w.engage_ramp_rate_n_per_s);
+  w.engage_ramp_rate_nm_per_s = r.number("engage_ramp_rate_nm_per_s", 0.0);
+  r.check("engage_ramp_rate_nm_per_s", w.engage_ramp_rate_nm_per_s >= 0,
+          "must be >= 0 (0: derived from engage_ramp_rate_n_per_s)");
   r.positive("device_watchdog_ms", w.device_watchdog_ms);
 }
 
@@ -94,6 +105,12 @@ RigDevice read_device(Reader& r) {
   if (auto m = r.table("mapping")) d.mapping = read_mapping(*m);
   read_limits(r, d.limits);
   read_watchdogs(r, d.watchdogs);
+  // The engage ramp is the slow, deliberate rise; the per-tick rate limit must never be what
+  // shapes it.
+  r.check("engage_ramp_rate_n_per_s", d.watchdogs.engage_ramp_rate_n_per_s <= d.limits.max_force_rate_n_per_s,
+          "must be <= max_force_rate_n_per_s (lower it, or raise the rate limit)");
+  r.check("engage_ramp_rate_nm_per_s", d.watchdogs.engage_ramp_rate_nm_per_s <= d.limits.max_torque_rate_nm_per_s,
+          "must be <= max_torque_rate_nm_per_s (lower it, or raise the rate limit)");
   if (auto p = r.table("passivity")) {
     d.passivity.enabled = p->boolean("enabled", d.passivity.enabled);
     p->positive("max_damping_n_s_per_m", d.passivity.max_damping_n_s_per_m);
@@ -115,6 +132,8 @@ RtSettings read_rt(Reader& r) {
   RtSettings rt;
   rt.period_ns = r.integer("period_ns", rt.period_ns);
   r.check("period_ns", rt.period_ns >= 100'000 && rt.period_ns <= 100'000'000, "must be 100000..100000000 (0.1-100 ms)");
+  rt.wake_phase_ns = r.integer("wake_phase_ns", rt.period_ns / 4);
+  r.check("wake_phase_ns", rt.wake_phase_ns >= 0 && rt.wake_phase_ns < rt.period_ns, "must be 0 <= wake_phase_ns < period_ns");
   rt.priority = static_cast<int>(r.integer("priority", rt.priority));
   r.check("priority", rt.priority >= 1 && rt.priority <= 99, "must be a SCHED_FIFO priority 1..99");
   rt.cpu = static_cast<int>(r.integer("cpu", rt.cpu));

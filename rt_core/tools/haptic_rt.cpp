@@ -157,6 +157,10 @@ int main(int argc, char** argv) {
                  report.messages.c_str());
   else if (!report.messages.empty())
     std::fprintf(stderr, "haptic-rt: note: %s", report.messages.c_str());
+  if (!(report.degraded_flags & rt::loop_no_affinity)) {
+    int moved = rt::keep_other_threads_off_cpu(rig.rt.cpu);
+    if (moved) std::fprintf(stderr, "haptic-rt: %d helper thread(s) kept off the loop's CPU %d\n", moved, rig.rt.cpu);
+  }
   rt::prefault_heap(8u << 20);
   rt::prefault_stack(256u << 10);
   loop->set_degraded_flags(report.degraded_flags);

@@ -7,7 +7,8 @@ tracked by the Popen objects the harness started and stopped by pid, never by na
 
 Start order, as `make run` and the systemd target: devices, then haptic-rt (it engages its
 devices at zero wrench), then the simulator, whose wrench then fades in. A loop started under a
-sim already pushing more than the rig's engage_threshold_n waits for the wrench to drop below it."""
+sim already pushing more than the rig's engage_threshold_n waits for the wrench to drop below it
+or to hold steady for engage_hold_ms."""
 import csv
 import os
 import pathlib

@@ -11,11 +11,12 @@ import time
 import numpy as np
 import pytest
 
-from hil_stack import FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, LINK_FAULTS, SCENES, Stack, read_csv
+from hil_stack import FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, LINK_FAULTS, SCENES, Stack, norm3, read_csv
 
 MAX_FORCE_N, MAX_TORQUE_NM = 8.0, 0.4
 STALE_PLUS_RAMP_S = 0.050 + 0.100
 STIR = f"scene:{SCENES / 'spoon_stirring.toml'}:hand"
+FLAG_WAITING_TO_ENGAGE = 1 << 7  # safety::flag_waiting_to_engage
 
 
 def force(row, d=0):
@@ -43,6 +44,11 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_takes_over(st
     # SIGKILL leaves the sim's segments behind (a crashed run). The loop must notice the samples
     # stop, ramp to zero within sim_stale_ms + sim_ramp_down_ms, keep ticking at 1 kHz, and the
     # next sim must detect the stale segment (dead writer pid), replace it and be rendered again.
+    # A restarted sim's state is new (its spoon starts from the scene, not at the hand), so its
+    # wrench passes the engage gate: small for 50 ms or steady for 150 ms. This scripted hand never
+    # stops stirring, so it may still be held back at the end: the loop must then be reading the new
+    # sim (fresh samples, no fault) and say it is waiting to engage. (That a restarted sim's wrench
+    # is rendered once it passes the gate: test_a_hand_holding_a_resting_load_..._after_a_fault[sim].)
     stack.fake_device("hand", motion=STIR)
     stack.rt()
     stack.sim("spoon_stirring")
@@ -69,8 +75,10 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_takes_over(st
     # (a few periods may be skipped as overruns on a loaded machine without PREEMPT_RT).
     assert np.median(np.diff([r["scheduled_ns"] for r in trace])) == 1e6
     assert sum(1 for ti in t if k < ti < k + 1.0) >= 950
-    after = [force(r) for r, ti in zip(trace, t) if ti > t[-1] - 1.0]
-    assert max(after) > 0.5, "the restarted sim was not rendered"
+    after = [r for r, ti in zip(trace, t) if ti > t[-1] - 1.0]
+    assert all(int(r["d0_faults"]) == 0 for r in after), "the restarted sim's samples are fresh"
+    assert max(force(r) for r in after) > 0.5 or all(int(r["d0_flags"]) & FLAG_WAITING_TO_ENGAGE for r in after), \
+        "the restarted sim was neither rendered nor held back by the engage gate"
     assert "replac" in stack.log("sim2") or json.loads((stack.dir / "sim2" / "stats.json").read_text())["complete"]
 
 
@@ -148,7 +156,7 @@ def test_parts_restart_in_any_order(stack):
     # device restarts under a running loop (the loop reconnects), and the sim restarts last. After
     # each, the loop is healthy again: fresh device frames, no fault, fresh sim samples. (Whether
     # it renders at once depends on the rig's engage rule: a restarted loop waits until the
-    # commanded wrench is below engage_threshold_n before ramping in.)
+    # commanded wrench is below engage_threshold_n, or steady for engage_hold_ms, before ramping in.)
     stack.fake_device("hand", motion=STIR)
     stack.rt()
     stack.sim("spoon_stirring")
@@ -208,3 +216,69 @@ def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
     assert "cannot keep up with the wall clock" in stack.log("sim")
     stats = json.loads((stack.dir / "sim" / "stats.json").read_text())
     assert stats["kept_up_with_wall_clock"] is False and stats["dropped_backlog_s"] >= 0.5
+
+
+# Re-engaging under a resting load (issue 8), fake_single's engage keys: link_recover_ms 100,
+# engage_hold_ms 150, engage_steady_band_n 0.5, engage_ramp_ms 200, engage_ramp_rate_n_per_s 20.
+RESTING_LOAD_N = 4.0
+FAULT_AT_S = 4.0  # device time; the loop and the stand-in sim are running and engaged well before
+
+
+@pytest.mark.parametrize("fault", ["link", "sim"])
+def test_a_hand_holding_a_resting_load_gets_it_back_through_the_ramp_after_a_fault(stack, fault):
+    # The hand carries a steady 4 N (the stand-in sim's F0, as a held bucket's weight; coupling
+    # spring 300 N/m about the hand's own pose). Either the device goes bus-off for 200 ms (long
+    # enough to trip its own 20 ms command watchdog, which the loop then clears while disabled),
+    # or the sim is SIGKILLed and restarted. The load never drops below engage_threshold_n, yet
+    # the hand must get it back: zero during the fault, then, once the load has been steady for
+    # engage_hold_ms, a ramp no faster than 20 N/s (>= 200 ms for 4 N) back to 4 N.
+    sim_args = ("--force", f"0,0,{-RESTING_LOAD_N}", "--stiffness", "300", "--rate", "200")
+    extra = ("--bus-off-at", str(FAULT_AT_S), "--bus-off-ms", "200") if fault == "link" else ()
+    stack.fake_device("hand", motion="hold", extra=extra)
+    device_t0 = stack.started_at["fake-hand"]
+    stack.rt()
+    stack.standin(*sim_args)
+    time.sleep(max(0.0, device_t0 + FAULT_AT_S - time.monotonic()))
+    fault_at = time.monotonic()
+    if fault == "sim":
+        stack.kill("standin")
+        time.sleep(0.5)
+        stack.standin(*sim_args, name="standin2")
+    time.sleep(1.5)
+    sims = ("standin2",) if fault == "sim" else ("standin",)
+    codes = {n: stack.stop(n) for n in ("rt", *sims, "fake-hand")}
+    assert set(codes.values()) == {0}, codes
+
+    trace = read_csv(stack.dir / "rt-trace.csv")
+    t = trace_time_s(trace)
+    k = wall_to_trace_s(trace, fault_at)
+    f = np.array([force(r) for r in trace])
+    faults = np.array([int(r["d0_faults"]) for r in trace])
+    carrying = f[(t > k - 0.5) & (t < k - 0.05)]
+    assert carrying.size and np.all(np.abs(carrying - RESTING_LOAD_N) < 0.3), \
+        f"the hand carried the load before: {carrying.min() if carrying.size else None} .. {carrying.max() if carrying.size else None} N"
+    cause = LINK_FAULTS if fault == "link" else FAULT_SIM_STALE
+    # The fault and its zero wrench (a link fault zeroes at once, a dead sim through its ramp) ...
+    search = int(np.argmax(t > k - 0.2))  # (the trace also starts with a link fault: no frame yet)
+    onset = search + int(np.argmax((faults[search:] & cause) != 0))
+    assert faults[onset] & cause and abs(t[onset] - k) < 0.3, (t[onset], k)
+    zero_from = onset + (6 if fault == "link" else int((STALE_PLUS_RAMP_S - 0.05) * 1000) + 2)
+    cleared = onset + int(np.argmax(faults[onset:] == 0))
+    assert cleared > zero_from and np.all(f[zero_from:cleared] < 1e-9), (t[onset], t[zero_from], t[cleared])
+    # ... then nothing until the load has been steady for engage_hold_ms ...
+    back = cleared + int(np.argmax(f[cleared:] > 0))
+    assert f[back] > 0, "never re-engaged under the resting load"
+    assert 0.14 <= t[back] - t[cleared] <= 0.6, t[back] - t[cleared]
+    # ... and a ramp to the full load: >= 4 N / 20 N/s, in steps of 0.02 N (plus the spring's own
+    # steps as the hand yields and x0 follows at 200 Hz), far below the 0.8 N/tick rate limit.
+    full = back + int(np.argmax(f[back:] > 0.95 * RESTING_LOAD_N))
+    assert f[full] > 0.95 * RESTING_LOAD_N, "did not reach the load again"
+    assert 0.18 <= t[full] - t[back] <= 0.6, t[full] - t[back]
+    assert np.max(np.abs(np.diff(f[back:full + 1]))) < 0.1
+    assert np.median(np.abs(np.diff(f[back:full + 1]))) < 0.0201
+    assert np.all(np.abs(f[t > t[-1] - 0.3] - RESTING_LOAD_N) < 0.3), "carrying it again at the end"
+    if fault == "link":
+        assert "watchdog" in stack.log("fake-hand"), "the 200 ms bus-off tripped the device's own watchdog"
+        device = read_csv(stack.dir / "fake-hand.csv")
+        tail = [r for r in device if r["t_s"] > device[-1]["t_s"] - 0.3]
+        assert np.median([norm3(r, "applied_f") for r in tail]) > 0.9 * RESTING_LOAD_N, "the device applies it again"

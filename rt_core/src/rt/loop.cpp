@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "hapfluid/wire/codec.h"
+
 namespace hapfluid::rt {
 namespace {
 
@@ -98,7 +100,10 @@ void RtLoop::read_sim(std::uint64_t now, std::uint32_t& loop_flags) {
   bool restarted = incarnation != sample_incarnation_;
   if (!restarted && generation == sample_generation_) return;
   if (restarted)
-    for (auto& d : devices_) d->interpolator.reset();
+    for (auto& d : devices_) {
+      d->interpolator.reset();
+      d->sim_restarted = true;
+    }
   sample_ = scratch_;
   sample_generation_ = generation;
   sample_incarnation_ = incarnation;
@@ -145,6 +150,8 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
   in.sim_age_ms = sim_age_ms(now);
+  in.sim_restarted = d.sim_restarted;
+  d.sim_restarted = false;
   safety::SafetyOutput out = d.safety.step(in);
   if (capped) out.flags |= safety::flag_stiffness_capped;
 
@@ -152,6 +159,12 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   safety::to(out.wrench.torque_nm, d.command.torque_nm);
   d.command.enable = out.enable;
   d.command.estop = out.estop;
+  // A latched command-watchdog trip, and nothing else, is the device's answer to our own silence
+  // (a link loss longer than device_watchdog_ms, a stalled loop). Once its frames flow again we
+  // clear it, which the device honours only while disabled, so clearing never switches force on:
+  // the safety layer's link recovery and engage gate decide when the wrench returns (issue 8).
+  // Every other device fault (e-stop, over-current, workspace, bad commands) stays latched.
+  d.command.clear_faults = !out.enable && !out.estop && d.fresh && valid && d.state.fault == HF_FAULT_COMMAND_WATCHDOG;
   d.scene_wrench = d.workspace.to_scene(out.wrench);
 
   auto& entry = states_record_.devices[index];
@@ -251,7 +264,11 @@ void RtLoop::publish(std::uint64_t tick, std::uint64_t scheduled_ns) {
 void RtLoop::run(std::uint64_t duration_ns) {
   const std::uint64_t period = static_cast<std::uint64_t>(rig_.rt.period_ns);
   std::uint64_t start = now_ns();
-  std::uint64_t next = (start / period + 1) * period;  // on the period grid
+  // On the period grid, shifted by rt.wake_phase_ns off the kernel's scheduler tick (which fires on
+  // whole multiples of its own period, and so of 1 ms): measured ~2x the median wake latency when
+  // the two coincide (docs/rig-setup.md, "Wake latency").
+  const std::uint64_t phase = static_cast<std::uint64_t>(rig_.rt.wake_phase_ns);
+  std::uint64_t next = (start / period + 1) * period + phase;
   std::uint64_t end = duration_ns ? start + duration_ns : ~0ull;
   while (running_.load(std::memory_order_relaxed) && next < end) {
     timespec ts{static_cast<time_t>(next / 1'000'000'000ull), static_cast<long>(next % 1'000'000'000ull)};

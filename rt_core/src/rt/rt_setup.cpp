@@ -6,8 +6,11 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <sys/syscall.h>
+
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 namespace hapfluid::rt {
@@ -32,6 +35,23 @@ void prefault_heap(std::size_t bytes) {
   if (!block) return;
   for (std::size_t i = 0; i < bytes; i += 4096) block[i] = 0;
   free(const_cast<unsigned char*>(block));
+}
+
+int keep_other_threads_off_cpu(int cpu) {
+  long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+  if (cpu < 0 || cpus < 2) return 0;
+  cpu_set_t others;
+  CPU_ZERO(&others);
+  for (long c = 0; c < cpus && c < CPU_SETSIZE; ++c)
+    if (c != cpu) CPU_SET(c, &others);
+  const long self = syscall(SYS_gettid);
+  int moved = 0;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/task", ec)) {
+    long tid = std::strtol(entry.path().filename().c_str(), nullptr, 10);
+    if (tid > 0 && tid != self && sched_setaffinity(static_cast<pid_t>(tid), sizeof others, &others) == 0) ++moved;
+  }
+  return moved;
 }
 
 RtSetupReport setup_realtime(const config::RtSettings& rt) {

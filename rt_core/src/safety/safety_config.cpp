@@ -27,6 +27,16 @@ SafetyConfig make_safety_config(const config::RigDevice& d, std::int64_t period_
   c.engage_threshold_nm = w.engage_threshold_nm > 0 ? w.engage_threshold_nm
                                                     : w.engage_threshold_n * l.max_torque_nm / l.max_force_n;
   c.link_recover_ms = w.link_recover_ms;
+  c.engage_hold_ms = w.engage_hold_ms;
+  c.engage_small_ms = w.engage_small_ms;
+  c.engage_steady_band_n = w.engage_steady_band_n;
+  c.engage_ramp_rate_n_per_s = w.engage_ramp_rate_n_per_s;
+  // The torque counterparts, unless given, scale with the limits like engage_threshold_nm.
+  double torque_per_force = l.max_torque_nm / l.max_force_n;
+  c.engage_steady_band_nm = w.engage_steady_band_nm > 0 ? w.engage_steady_band_nm
+                                                        : w.engage_steady_band_n * torque_per_force;
+  c.engage_ramp_rate_nm_per_s = w.engage_ramp_rate_nm_per_s > 0 ? w.engage_ramp_rate_nm_per_s
+                                                                : w.engage_ramp_rate_n_per_s * torque_per_force;
   c.passivity_enabled = d.passivity.enabled;
   c.passivity_max_damping_n_s_per_m = d.passivity.max_damping_n_s_per_m;
   c.passivity_max_damping_nm_s_per_rad = d.passivity.max_damping_nm_s_per_rad;
@@ -45,11 +55,16 @@ std::string describe(const SafetyConfig& c) {
       "  engage_threshold_n = %g, engage_ramp_ms = %g (rig)\n  require_deadman = %s (rig)\n"
       "  engage_threshold_nm = %g (rig, or engage_threshold_n * max_torque_nm / max_force_n)\n"
       "  link_recover_ms = %g (rig)\n"
+      "  engage_small_ms = %g (rig)\n"
+      "  engage_hold_ms = %g, engage_steady_band_n = %g, engage_steady_band_nm = %g (rig; 0 ms: only small commands engage)\n"
+      "  engage_ramp_rate_n_per_s = %g, engage_ramp_rate_nm_per_s = %g (rig)\n"
       "  passivity: %s, max damping %g N*s/m and %g N*m*s/rad, energy cap %g J (rig)\n",
       c.max_force_n, c.max_torque_nm, c.max_force_axis_n.x, c.max_force_axis_n.y, c.max_force_axis_n.z,
       c.max_torque_axis_nm.x, c.max_torque_axis_nm.y, c.max_torque_axis_nm.z, c.max_force_rate_n_per_s,
       c.max_torque_rate_nm_per_s, c.sim_stale_ms, c.sim_ramp_down_ms, c.link_timeout_ms, c.engage_threshold_n,
       c.engage_ramp_ms, c.require_deadman ? "true" : "false", c.engage_threshold_nm, c.link_recover_ms,
+      c.engage_small_ms, c.engage_hold_ms, c.engage_steady_band_n, c.engage_steady_band_nm, c.engage_ramp_rate_n_per_s,
+      c.engage_ramp_rate_nm_per_s,
       c.passivity_enabled ? "on" : "off", c.passivity_max_damping_n_s_per_m, c.passivity_max_damping_nm_s_per_rad,
       c.passivity_energy_cap_j);
   return text;

@@ -28,6 +28,44 @@ void SafetyLayer::update_link(const SafetyInput& in) {
   }
 }
 
+bool SafetyLayer::may_engage(const Wrench& command, std::uint32_t limit_flags, std::uint64_t now_ns) {
+  const double force_n = norm(command.force_n), torque_nm = norm(command.torque_nm);
+  // Small, and small for engage_small_ms: a ringing spring passes through zero, it does not stay there.
+  bool small = force_n < config_.engage_threshold_n && torque_nm < config_.engage_threshold_nm;
+  if (!small) {
+    small_window_open_ = false;
+  } else if (!small_window_open_) {
+    small_window_open_ = true;
+    small_since_ns_ = now_ns;
+  }
+  small = small && double(now_ns - small_since_ns_) >= config_.engage_small_ms * kNsPerMs;
+  // Steady: within the band of one reference value for the whole hold window. The reference is
+  // the first value of the window, so a slow drift leaves the band too (it is not "steady"), and
+  // an oscillation wider than the band restarts the window at every excursion.
+  bool steady = false;
+  constexpr std::uint32_t kNotWhatWasAsked = flag_nonfinite_input | flag_force_norm_limited | flag_force_axis_limited |
+                                             flag_torque_norm_limited | flag_torque_axis_limited;
+  if (config_.engage_hold_ms > 0 && !(limit_flags & kNotWhatWasAsked)) {
+    bool in_band = steady_window_open_ &&
+                   norm(command.force_n - steady_reference_.force_n) <= config_.engage_steady_band_n &&
+                   norm(command.torque_nm - steady_reference_.torque_nm) <= config_.engage_steady_band_nm;
+    if (!in_band) {
+      steady_window_open_ = true;
+      steady_reference_ = command;
+      steady_since_ns_ = now_ns;
+    }
+    steady = double(now_ns - steady_since_ns_) >= config_.engage_hold_ms * kNsPerMs;
+  } else {
+    steady_window_open_ = false;  // a limited (saturated) or non-finite command is not a resting load
+  }
+  if (!small && !steady) return false;
+  // Longer for a larger load, so the rise stays at or below engage_ramp_rate (rate limit untouched).
+  engage_ramp_ms_ = std::max({config_.engage_ramp_ms, force_n / config_.engage_ramp_rate_n_per_s * 1e3,
+                              torque_nm / config_.engage_ramp_rate_nm_per_s * 1e3});
+  restart_engage_windows();
+  return true;
+}
+
 SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   SafetyOutput out;
   // Ramps follow elapsed time, so "zero within sim_ramp_down_ms" holds even when ticks were
@@ -63,7 +101,9 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
     stale_scale_ = std::max(0.0, stale_scale_ - dt_ms / config_.sim_ramp_down_ms);
   } else {
     faults_ &= ~fault_sim_stale;
-    stale_scale_ = std::min(1.0, stale_scale_ + dt_ms / config_.engage_ramp_ms);
+    // Still engaged (a stall shorter than the ramp-down): fade back in. Disengaged: step 5's ramp
+    // from zero is the resume, and this scale must not ramp a second time on top of it.
+    stale_scale_ = engage_ == Engage::disengaged ? 1.0 : std::min(1.0, stale_scale_ + dt_ms / config_.engage_ramp_ms);
   }
   if (stale || stale_scale_ < 1.0) out.flags |= flag_sim_stale_ramp;
   Wrench scaled = stale_scale_ * limited;
@@ -73,18 +113,23 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   if (deadman_released) out.flags |= flag_deadman_released;
   bool hard_zero = (faults_ & ~fault_sim_stale) != 0 || deadman_released;
 
-  // 5: engage.
-  if (hard_zero) {
+  // 5: engage. A restarted sim's state is new (its body perhaps far from the hand): like after a
+  // hard zero, its wrench must pass the gate.
+  if (hard_zero || in.sim_restarted) {
     engage_ = Engage::disengaged;
     engage_scale_ = 0;
-  } else if (engage_ == Engage::disengaged) {
-    if (norm(scaled.force_n) < config_.engage_threshold_n && norm(scaled.torque_nm) < config_.engage_threshold_nm)
+    restart_engage_windows();
+  }
+  if (engage_ == Engage::disengaged && !hard_zero) {
+    if (!stale && may_engage(limited, out.flags, in.now_ns)) {
       engage_ = Engage::ramping;
-    else
+    } else {
       out.flags |= flag_waiting_to_engage;
+      if (stale) restart_engage_windows();
+    }
   }
   if (engage_ == Engage::ramping) {
-    engage_scale_ = std::min(1.0, engage_scale_ + dt_ms / config_.engage_ramp_ms);
+    engage_scale_ = std::min(1.0, engage_scale_ + dt_ms / engage_ramp_ms_);
     out.flags |= flag_engaging;
     if (engage_scale_ >= 1.0) engage_ = Engage::engaged;
   }

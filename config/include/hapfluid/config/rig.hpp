@@ -56,6 +56,16 @@ struct Watchdogs {
   double engage_threshold_n = 1.0;   // forces engage only once the commanded force is below this
   double engage_threshold_nm = 0.0;  // ... and the torque below this; 0: threshold_n * max_torque / max_force
   double engage_ramp_ms = 200.0;     // then ramp in over this long
+  double engage_small_ms = 50.0;     // "below": for this long (a ringing spring only crosses zero); 0: at once
+  // Engaging under a resting load (a held bucket's weight never drops below the threshold): a
+  // command that stayed within +/- engage_steady_band_n (and _nm) for engage_hold_ms, within the
+  // limits, engages too. 0 ms: off. 0 for the _nm band/rate: derived like engage_threshold_nm.
+  double engage_hold_ms = 150.0;
+  double engage_steady_band_n = 0.5;
+  double engage_steady_band_nm = 0.0;
+  // The ramp from zero never rises faster than this: it lasts max(engage_ramp_ms, |F| / rate).
+  double engage_ramp_rate_n_per_s = 20.0;
+  double engage_ramp_rate_nm_per_s = 0.0;
   double device_watchdog_ms = 20.0;  // device firmware: no valid command for this long -> motors off
 };
 
@@ -88,6 +98,10 @@ struct RtSettings {
   std::int64_t period_ns = 1'000'000;
   int priority = 80;               // SCHED_FIFO priority 1..99
   int cpu = -1;                    // CPU to pin the loop to; -1: no pinning
+  // Where in each period the loop wakes, from whole multiples of period_ns on CLOCK_MONOTONIC.
+  // Not 0: the kernel's scheduler tick fires on those multiples (all CPUs), and a wake-up that
+  // coincides with it waits behind the tick's work (docs/rig-setup.md). Default period_ns / 4.
+  std::int64_t wake_phase_ns = 250'000;
   RtPolicy policy = RtPolicy::ignore;
   SharedMemory shm;
   std::uint32_t trace_ring_records = 65536;  // power of two

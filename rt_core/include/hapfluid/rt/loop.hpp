@@ -98,6 +98,7 @@ class RtLoop {
     device::DeviceCommand command;
     LinkQuality link;
     bool fresh = false;
+    bool sim_restarted = false;    // a new sim incarnation's first sample, not yet seen by the safety layer
     safety::Wrench scene_wrench;
   };
 

@@ -36,6 +36,11 @@ RtSetupReport setup_realtime(const config::RtSettings& rt);
 void prefault_stack(std::size_t bytes);
 // Disables heap trimming and mmap for malloc, and touches `bytes` of heap once.
 void prefault_heap(std::size_t bytes);
+// Moves every other thread of this process (device reopen workers, the supervisor, library
+// threads) off `cpu`, so none of their syscalls, which a non-PREEMPT_RT kernel does not preempt,
+// sits on the loop's CPU when it wakes. Call from the loop thread after pinning it; returns how
+// many threads were moved (0 when cpu < 0 or the machine has one CPU).
+int keep_other_threads_off_cpu(int cpu);
 // "PREEMPT_RT" or "not PREEMPT_RT (...)" from /sys/kernel/realtime.
 bool kernel_is_preempt_rt();
 

@@ -26,6 +26,15 @@ struct SafetyConfig {
   double engage_ramp_ms = 200.0;
   bool require_deadman = false;
   double engage_threshold_nm = 0.05;             // torque counterpart of engage_threshold_n
+  // Engaging under a resting load (issue 8): a command that stayed within +/- the steady band for
+  // engage_hold_ms (and within the limits) may engage too; 0 ms turns this rule off. The ramp from
+  // zero then lasts max(engage_ramp_ms, |F| / engage_ramp_rate_n_per_s, |tau| / ..._nm_per_s).
+  double engage_hold_ms = 150.0;
+  double engage_small_ms = 50.0;  // a small command must stay small this long (0: at once)
+  double engage_steady_band_n = 0.5;
+  double engage_steady_band_nm = 0.025;
+  double engage_ramp_rate_n_per_s = 20.0;
+  double engage_ramp_rate_nm_per_s = 1.0;
   double link_recover_ms = 100.0;                // healthy link this long before the link fault clears
   double passivity_max_damping_n_s_per_m = 20.0; // most damping the passivity controller may add
   double passivity_max_damping_nm_s_per_rad = 0.2;

@@ -9,9 +9,17 @@
 //                                sim_ramp_down_ms; fresh samples again -> ramps back over engage_ramp_ms.
 //                                (Ramps use the elapsed time between steps, so skipped ticks do
 //                                not stretch them.)
-//   5. engage                    after any hard zero the output stays zero until the (scaled)
-//                                command is below engage_threshold_n/_nm, then ramps in over
-//                                engage_ramp_ms.
+//   5. engage                    after any hard zero, and when a restarted sim's first sample
+//                                arrives, the output stays zero until the command of step 3, with fresh sim
+//                                samples, is either small (|F| < engage_threshold_n and |tau| <
+//                                engage_threshold_nm for engage_small_ms, so the zero crossing of
+//                                a ringing spring does not count) or steady: it stayed within the
+//                                steady band (engage_steady_band_n/_nm) of one value for engage_hold_ms,
+//                                never limited by step 3. A held load (a bucket's weight) is
+//                                steady; a large oscillating or drifting command keeps waiting.
+//                                Then the output ramps in from zero over max(engage_ramp_ms,
+//                                |F| / engage_ramp_rate_n_per_s, |tau| / engage_ramp_rate_nm_per_s),
+//                                so the rise is deliberate and step 6 never has to shape it.
 //   6. rate limit                change per tick <= max_*_rate * period (uniform scaling, so the
 //                                limits of step 3 still hold).
 //   7. hard gates                latched e-stop, link timeout/invalid state, device fault, deadman
@@ -21,7 +29,12 @@
 //
 // Recovery rules: e-stop needs reset_estop() while the e-stop input is released; link faults
 // clear after link_recover_ms of healthy frames, then the wrench re-engages through step 5;
-// sim staleness clears with the first fresh sample and resumes through the step-4 ramp.
+// sim staleness clears with the first fresh sample and resumes through the step-4 ramp when it is
+// the same sim, late (a stall: its bodies and couplings carry on from where the hand left them);
+// a restarted sim starts from its own initial state, perhaps far from the hand, so its wrench
+// re-engages through step 5 (SafetyInput::sim_restarted).
+// The steady window only counts ticks without a hard zero and with fresh sim samples: a command
+// computed from a stale device pose says nothing about the load the hand holds now.
 // Pure state machine: no clock reads, no I/O, no allocation; time arrives in the input.
 #pragma once
 
@@ -45,6 +58,7 @@ struct SafetyInput {
   bool deadman_pressed = false;
   bool estop_input = false;        // e-stop button / operator request (latches)
   double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
+  bool sim_restarted = false;      // this tick's sample is the first from a new sim (or the first ever)
 };
 
 struct SafetyOutput {
@@ -74,6 +88,10 @@ class SafetyLayer {
  private:
   enum class Engage { disengaged, ramping, engaged };
   void update_link(const SafetyInput& in);
+  // Step 5's gate while disengaged: true when `command` (after step 3, whose flags are
+  // `limit_flags`) may start the engage ramp; sets engage_ramp_ms_ for it.
+  bool may_engage(const Wrench& command, std::uint32_t limit_flags, std::uint64_t now_ns);
+  void restart_engage_windows() { steady_window_open_ = small_window_open_ = false; }
 
   SafetyConfig config_;
   PassivityController passivity_;
@@ -90,6 +108,12 @@ class SafetyLayer {
   double stale_scale_ = 0;         // step 4
   Engage engage_ = Engage::disengaged;
   double engage_scale_ = 0;        // step 5
+  double engage_ramp_ms_ = 0;      // this engagement's ramp duration
+  bool steady_window_open_ = false;
+  Wrench steady_reference_;        // the value the command must stay near
+  std::uint64_t steady_since_ns_ = 0;
+  bool small_window_open_ = false;
+  std::uint64_t small_since_ns_ = 0;
 };
 
 }  // namespace hapfluid::safety

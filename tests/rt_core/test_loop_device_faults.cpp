@@ -1,0 +1,104 @@
+// The loop's answer to device-reported faults: a latched command-watchdog trip (the device's
+// reaction to the host's own silence, e.g. a link loss longer than device_watchdog_ms) is cleared
+// once frames flow again, always with enable off; every other fault stays latched (issue 8).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include "hapfluid/config/rig.hpp"
+#include "hapfluid/rt/loop.hpp"
+#include "hapfluid/wire/codec.h"
+
+using namespace hapfluid;
+
+namespace {
+
+// The device boundary: answers every poll with a fresh, valid state carrying `fault` (or nothing
+// when `silent`), and keeps the last command the loop sent.
+class FaultyDevice final : public device::Device {
+ public:
+  std::uint32_t fault = 0;
+  bool silent = false;
+  device::DeviceCommand last{};
+  bool poll(device::DeviceState& out) override {
+    if (silent) return false;
+    out = {};
+    out.host_receive_ns = shm::monotonic_ns();
+    out.fault = fault;
+    return true;
+  }
+  bool send(const device::DeviceCommand& c) override {
+    last = c;
+    return true;
+  }
+  device::DeviceHealth health() const override {
+    device::DeviceHealth h;
+    h.connected = true;
+    return h;
+  }
+  const char* name() const override { return "faulty"; }
+};
+
+struct LoopWithOneDevice {
+  FaultyDevice* device = nullptr;
+  std::unique_ptr<rt::RtLoop> loop;
+  std::uint64_t now = 1'000'000'000;
+  LoopWithOneDevice() {
+    config::Rig rig = config::parse_rig(R"(
+[rt]
+trace_ring_records = 1024
+[[devices]]
+name = "arm"
+[devices.transport]
+kind = "loopback"
+address = "/tmp/unused"
+)", "device-faults-test.toml");
+    rig.rt.shm.prefix = "hapfluid-devfault-" + std::to_string(::getpid());
+    auto d = std::make_unique<FaultyDevice>();
+    device = d.get();
+    std::vector<std::unique_ptr<device::Device>> devices;
+    devices.push_back(std::move(d));
+    rt::LoopOptions options;
+    options.publish_trace = false;
+    loop = std::make_unique<rt::RtLoop>(rig, std::move(devices), options);
+  }
+  void ticks(int n) {
+    for (int i = 0; i < n; ++i, now += 1'000'000) loop->tick(now, now);
+  }
+};
+
+}  // namespace
+
+TEST(LoopDeviceFaults, ALatchedCommandWatchdogTripIsClearedWhileDisabledOnceFramesReturn) {
+  LoopWithOneDevice l;
+  l.device->fault = HF_FAULT_COMMAND_WATCHDOG;
+  l.ticks(3);
+  EXPECT_TRUE(l.device->last.clear_faults);
+  EXPECT_FALSE(l.device->last.enable) << "the device honours a clear only while disabled";
+  l.device->fault = 0;
+  l.ticks(1);
+  EXPECT_FALSE(l.device->last.clear_faults) << "nothing left to clear";
+}
+
+TEST(LoopDeviceFaults, EveryOtherDeviceFaultStaysLatched) {
+  // An e-stop, an over-current or a workspace fault is the device protecting the hand for its own
+  // reasons: only an operator may clear those.
+  for (std::uint32_t fault : {std::uint32_t(HF_FAULT_ESTOP), std::uint32_t(HF_FAULT_COMMAND_WATCHDOG | HF_FAULT_ESTOP),
+                              std::uint32_t(HF_FAULT_OVERCURRENT), std::uint32_t(HF_FAULT_WORKSPACE)}) {
+    LoopWithOneDevice l;
+    l.device->fault = fault;
+    l.ticks(3);
+    EXPECT_FALSE(l.device->last.clear_faults) << "fault bits " << fault;
+    EXPECT_FALSE(l.device->last.enable);
+  }
+}
+
+TEST(LoopDeviceFaults, NoClearWithoutAFreshFrame) {
+  // The clear is an answer to what the device says now, not to a state remembered from before a
+  // link loss.
+  LoopWithOneDevice l;
+  l.device->fault = HF_FAULT_COMMAND_WATCHDOG;
+  l.ticks(2);
+  l.device->silent = true;
+  l.ticks(1);
+  EXPECT_FALSE(l.device->last.clear_faults);
+}
