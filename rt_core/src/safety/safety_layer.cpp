@@ -42,10 +42,12 @@ bool SafetyLayer::may_engage(const Wrench& command, std::uint32_t limit_flags, s
   // Steady: within the band of one reference value for the whole hold window. The reference is
   // the first value of the window, so a slow drift leaves the band too (it is not "steady"), and
   // an oscillation wider than the band restarts the window at every excursion.
+  // The steady rule judges the command as limited (step 3): a steady load beyond a limit (a pan
+  // held by its handle asking more torque than the device has) is rendered at the limit, exactly
+  // as it would be had the device stayed engaged; refusing it would leave that hand without any
+  // force for the whole run. Only a non-finite command never counts.
   bool steady = false;
-  constexpr std::uint32_t kNotWhatWasAsked = flag_nonfinite_input | flag_force_norm_limited | flag_force_axis_limited |
-                                             flag_torque_norm_limited | flag_torque_axis_limited;
-  if (config_.engage_hold_ms > 0 && !(limit_flags & kNotWhatWasAsked)) {
+  if (config_.engage_hold_ms > 0 && !(limit_flags & flag_nonfinite_input)) {
     bool in_band = steady_window_open_ &&
                    norm(command.force_n - steady_reference_.force_n) <= config_.engage_steady_band_n &&
                    norm(command.torque_nm - steady_reference_.torque_nm) <= config_.engage_steady_band_nm;
@@ -56,7 +58,7 @@ bool SafetyLayer::may_engage(const Wrench& command, std::uint32_t limit_flags, s
     }
     steady = double(now_ns - steady_since_ns_) >= config_.engage_hold_ms * kNsPerMs;
   } else {
-    steady_window_open_ = false;  // a limited (saturated) or non-finite command is not a resting load
+    steady_window_open_ = false;
   }
   if (!small && !steady) return false;
   // Longer for a larger load, so the rise stays at or below engage_ramp_rate (rate limit untouched).

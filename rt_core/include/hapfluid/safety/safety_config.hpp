@@ -27,8 +27,8 @@ struct SafetyConfig {
   bool require_deadman = false;
   double engage_threshold_nm = 0.05;             // torque counterpart of engage_threshold_n
   // Engaging under a resting load (issue 8): a command that stayed within +/- the steady band for
-  // engage_hold_ms (and within the limits) may engage too; 0 ms turns this rule off. The ramp from
-  // zero then lasts max(engage_ramp_ms, |F| / engage_ramp_rate_n_per_s, |tau| / ..._nm_per_s).
+  // engage_hold_ms (judged after the limits: a load beyond them engages at the limit) may engage
+  // too; 0 ms turns this rule off. The ramp from zero then lasts max(engage_ramp_ms, |F| / engage_ramp_rate_n_per_s, |tau| / ..._nm_per_s).
   double engage_hold_ms = 150.0;
   double engage_small_ms = 50.0;  // a small command must stay small this long (0: at once)
   double engage_steady_band_n = 0.5;
