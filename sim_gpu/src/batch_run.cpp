@@ -66,11 +66,10 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   const config::Scene scene = config::load_scene(o.scene);
   const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;
 
-  std::filesystem::create_directories(o.out / "particles");
+  std::filesystem::create_directories(o.out);
   // A previous run's statistics must not pass for this run's until this run completes.
   std::filesystem::remove(o.out / "stats.json");
-  for (const auto& entry : std::filesystem::directory_iterator(o.out / "particles"))
-    if (entry.path().extension() == ".vtk" || entry.path().extension() == ".part") std::filesystem::remove(entry.path());
+  VtkFrameSeries vtk_frames(o.out / "particles", o.export_every_s);
 
   CpuSolver solver(build_model(scene), o.threads);
   const SimulationModel& m = solver.model();
@@ -81,7 +80,6 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   double dt_min = 1e300, dt_max = 0;
   const double frame = 1.0 / m.params.frame_rate_hz;
   const int frames = std::max(1, static_cast<int>(std::ceil(duration / frame - 1e-9)));
-  double next_export = 0;
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
   auto set_devices = [&](double t) {
@@ -93,12 +91,9 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
     for (const VirtualCoupling& c : m.couplings) couplings_csv.row(coupling_row(m, c, t));
   };
   auto export_frame = [&](double t) {
-    if (o.export_every_s <= 0 || t + 1e-9 < next_export) return;
-    char name[64];
-    std::snprintf(name, sizeof name, "frame_%06d.vtk", r.frames_exported);
-    write_vtk_frame(o.out / "particles" / name, m, t);
-    ++r.frames_exported;
-    next_export += o.export_every_s;
+    if (!vtk_frames.due(t)) return;
+    vtk_frames.write(m, t);
+    r.frames_exported = vtk_frames.written();
   };
 
   std::string error;
