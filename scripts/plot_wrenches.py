@@ -8,12 +8,16 @@ panel and a torque panel per device (fig. 8, 9, 11); several runs are overlaid, 
 (fig. 10: the four container viscosities).
 
     plot_wrenches.py RUN_OR_CSV [RUN_OR_CSV ...] --out plot.png [--title T] [--labels a,b,...]
-                     [--component norm|x|y|z] [--torque-component norm|x|y|z]
+                     [--scene NAME] [--component norm|x|y|z] [--torque-component norm|x|y|z]
+
+--scene picks the components the paper's figure of that scene shows (SCENE_COMPONENTS); --component
+and --torque-component override it. Without either: the norms.
 """
 import argparse
 import csv
 import pathlib
 import sys
+import tomllib
 from collections import defaultdict
 
 import matplotlib
@@ -22,6 +26,39 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 COLUMNS = ("t", "fx", "fy", "fz", "tx", "ty", "tz")
+SCENES = pathlib.Path(__file__).resolve().parent.parent / "config" / "scenes"
+
+
+class Components:
+    """Which force and torque component a scene's figure shows, and what that component means."""
+
+    def __init__(self, force="norm", torque="norm", force_meaning="", torque_meaning=""):
+        self.force, self.torque = force, torque
+        self.force_meaning, self.torque_meaning = force_meaning, torque_meaning
+
+
+# The one place a scene's plot components are chosen (make run's wrenches.png, run_scenarios.py's
+# figures). A norm hides the sign: fig. 8b shows the force against the stroke, so the stirring plot
+# shows the stroke axis (x) and the torque about the horizontal axis across it (y). Keys are scene
+# names or their prefix before a trailing _<number> (spinning_glass_10 -> spinning_glass).
+SCENE_COMPONENTS = {
+    "spoon_stirring": Components("x", "y", "along the stroke", "about y, across the stroke"),
+    "bowl_pouring": Components("z", "y", "vertical, - = weight", "about y, the tilt axis"),
+    "spinning_glass": Components("norm", "z", "", "about z, the spin axis"),
+    "bucket_bimanual": Components("z", "y", "vertical, - = weight", "about y, the tilt axis"),
+    "crepe": Components("z", "y", "vertical, - = weight", "about y, the pouring tilt axis"),
+}
+
+
+def scene_components(scene: str) -> Components:
+    name = pathlib.Path(scene).stem
+    base = name.rsplit("_", 1)[0] if name.rsplit("_", 1)[-1].isdigit() else name
+    return SCENE_COMPONENTS.get(name) or SCENE_COMPONENTS.get(base) or Components()
+
+
+def axis_label(quantity: str, which: str, meaning: str, unit: str) -> str:
+    name = f"|{quantity}|" if which == "norm" else f"{quantity} {which}"
+    return f"{name} ({unit})" if not meaning else f"{name}, {meaning} ({unit})"
 
 
 def find_csv(path: pathlib.Path) -> pathlib.Path:
@@ -33,19 +70,21 @@ def find_csv(path: pathlib.Path) -> pathlib.Path:
     sys.exit(f"plot_wrenches: {path}: no couplings.csv (or device_wrenches.csv) found")
 
 
-def read_wrenches(path: pathlib.Path):
-    """{device: {column: [values]}}, in file order."""
+def read_wrenches(path: pathlib.Path, time_column: str = "t", time_offset_s: float = 0.0):
+    """{device: {column: [values]}}, in file order; "t" is `time_column` minus time_offset_s."""
     series = defaultdict(lambda: defaultdict(list))
+    columns = (time_column,) + COLUMNS[1:]
     with path.open(newline="") as f:
         rows = csv.DictReader(line for line in f if not line.startswith("#"))
-        missing = [c for c in COLUMNS if c not in (rows.fieldnames or [])]
+        missing = [c for c in columns if c not in (rows.fieldnames or [])]
         if missing:
             sys.exit(f"plot_wrenches: {path}: missing columns {', '.join(missing)} (has {rows.fieldnames})")
         for number, row in enumerate(rows, start=2):
             try:
-                values = {c: float(row[c]) for c in COLUMNS}
+                values = {c: float(row[c]) for c in columns}
             except (TypeError, ValueError):
                 sys.exit(f"plot_wrenches: {path}:{number}: a value is not a number: {row}")
+            values["t"] = values.pop(time_column) - time_offset_s
             device = row.get("device") or "device"
             for c, v in values.items():
                 series[device][c].append(v)
@@ -61,21 +100,70 @@ def component(data, prefix, which):
     return {"x": x, "y": y, "z": z}[which]
 
 
+def scripted_motions(scene: str) -> dict:
+    """{scene device: [(kind, start_s, stop_s)]} of config/scenes/<scene>.toml (or a scene file)."""
+    path = pathlib.Path(scene)
+    if path.suffix != ".toml":
+        path = SCENES / f"{scene}.toml"
+    if not path.is_file():
+        return {}
+    with path.open("rb") as f:
+        devices = tomllib.load(f).get("devices", [])
+    return {d["name"]: [(m.get("kind", "motion"), float(m.get("start_s", 0.0)), float(m["stop_s"]))
+                        for m in d.get("motion", []) if "stop_s" in m] for d in devices}
+
+
+def mark_motions(ax, motions, label: bool):
+    """The scripted hand's motion segments, shaded, so the phases of the figure can be read off."""
+    for kind, start, stop in motions:
+        ax.axvspan(start, stop, color="0.5", alpha=0.08, lw=0)
+        for x in (start, stop):
+            ax.axvline(x, color="0.4", lw=0.8, ls=":")
+        if label:
+            ax.annotate(f"{kind} {start:g}-{stop:g} s", xy=((start + stop) / 2, 0.98), xycoords=("data", "axes fraction"),
+                        ha="center", va="top", fontsize=7, color="0.3")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("runs", nargs="+", type=pathlib.Path)
     parser.add_argument("--out", type=pathlib.Path, required=True)
     parser.add_argument("--title", default="")
     parser.add_argument("--labels", default="", help="comma-separated legend labels, one per run")
-    parser.add_argument("--component", default="norm", choices=("norm", "x", "y", "z"))
-    parser.add_argument("--torque-component", default="norm", choices=("norm", "x", "y", "z"))
+    parser.add_argument("--scene", default="", help="scene name: its figure's components (SCENE_COMPONENTS)")
+    parser.add_argument("--component", default=None, choices=("norm", "x", "y", "z"))
+    parser.add_argument("--torque-component", default=None, choices=("norm", "x", "y", "z"))
+    parser.add_argument("--time", default="sim", choices=("sim", "wall"),
+                        help="time axis: sim (column t, simulated time) or wall (column wall_s: the wall clock, as "
+                             "the hand moves; differs from simulated time when the sim runs slower than real time)")
+    parser.add_argument("--time-offset", default="0",
+                        help="seconds subtracted from the time axis, one value or one per run (hapfluid.py "
+                             "summary.json script_offset_s: then 0 is the scene script's start, its motions marked)")
     args = parser.parse_args()
+    chosen = scene_components(args.scene)
+    if args.component and args.component != chosen.force:
+        chosen.force, chosen.force_meaning = args.component, ""
+    if args.torque_component and args.torque_component != chosen.torque:
+        chosen.torque, chosen.torque_meaning = args.torque_component, ""
 
     labels = args.labels.split(",") if args.labels else [p.name if p.is_dir() else p.parent.name for p in args.runs]
     if len(labels) != len(args.runs):
         sys.exit("plot_wrenches: --labels needs one label per run")
-    runs = [read_wrenches(find_csv(p)) for p in args.runs]
+    try:
+        offsets = [float(v) for v in args.time_offset.split(",")]
+    except ValueError:
+        sys.exit(f"plot_wrenches: --time-offset {args.time_offset}: not numbers")
+    offsets = offsets * len(args.runs) if len(offsets) == 1 else offsets
+    if len(offsets) != len(args.runs):
+        sys.exit("plot_wrenches: --time-offset needs one value, or one per run")
+    time_column = "t" if args.time == "sim" else "wall_s"
+    runs = [read_wrenches(find_csv(p), time_column, o) for p, o in zip(args.runs, offsets)]
     devices = sorted({d for run in runs for d in run})
+    on_script_clock = args.time_offset != "0"
+    motions = scripted_motions(args.scene) if args.scene and on_script_clock else {}
+    xlabel = {("sim", False): "simulated time (s)", ("wall", False): "wall-clock time since the sim started (s)",
+              ("sim", True): "simulated time, 0 = the scene script's start (s)",
+              ("wall", True): "scene time: the hand's clock, 0 = the script's start (s)"}[(args.time, on_script_clock)]
 
     fig, axes = plt.subplots(2, len(devices), figsize=(6 * len(devices), 6), sharex=True, squeeze=False)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
@@ -86,14 +174,16 @@ def main():
                 continue
             data, colour = run[device], colours[k % len(colours)]
             name = label if len(runs) > 1 else None
-            force_ax.plot(data["t"], component(data, "f", args.component), color=colour, label=name, lw=1.2)
-            torque_ax.plot(data["t"], component(data, "t", args.torque_component), color=colour, label=name, lw=1.2)
+            force_ax.plot(data["t"], component(data, "f", chosen.force), color=colour, label=name, lw=1.2)
+            torque_ax.plot(data["t"], component(data, "t", chosen.torque), color=colour, label=name, lw=1.2)
         force_ax.set_title(device)
-        force_ax.set_ylabel(f"force {args.component} (N)")
-        torque_ax.set_ylabel(f"torque {args.torque_component} (N·m)")
-        torque_ax.set_xlabel("time (s)")
+        force_ax.set_ylabel(axis_label("force", chosen.force, chosen.force_meaning, "N"))
+        torque_ax.set_ylabel(axis_label("torque", chosen.torque, chosen.torque_meaning, "N·m"))
+        torque_ax.set_xlabel(xlabel)
         for ax in (force_ax, torque_ax):
             ax.grid(alpha=0.3)
+            ax.axhline(0.0, color="0.3", lw=0.6)
+            mark_motions(ax, motions.get(device, []), label=ax is force_ax)
             if len(runs) > 1:
                 ax.legend(fontsize=8)
     if args.title:
