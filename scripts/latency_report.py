@@ -10,11 +10,17 @@
         cyclictest (rt-tests) at the rig's SCHED_FIFO priority, period and CPU over the same window,
         then prints haptic-rt's wake latency next to cyclictest's.
 
+    latency_report.py TRACE --cyclictest-log FILE --window-ns START:END
+        a run made elsewhere (scripts/hapfluid.py: cyclictest beside the live stack, started with
+        start_cyclictest): the trace's ticks scheduled in [START, END] (CLOCK_MONOTONIC ns, the
+        window cyclictest ran) next to cyclictest's histogram output in FILE.
+
 Times are reported in microseconds. A deadline miss is a tick whose work ended after the next
 tick's scheduled wake time; overruns are the periods the loop skipped while re-phasing.
 """
 import argparse
 import json
+import math
 import os
 import pathlib
 import re
@@ -51,6 +57,15 @@ def load_trace(path) -> dict:
     if data.shape[0] == 0:
         sys.exit(f"latency_report: {path}: the trace holds no ticks")
     return {name: data[:, i] for i, name in enumerate(header)}
+
+
+def select_window(trace: dict, start_ns: float, end_ns: float) -> dict:
+    """The ticks scheduled within [start_ns, end_ns] (CLOCK_MONOTONIC, as scheduled_ns)."""
+    keep = (trace["scheduled_ns"] >= start_ns) & (trace["scheduled_ns"] <= end_ns)
+    if not keep.any():
+        sys.exit(f"latency_report: no tick of the trace lies in the window {start_ns:.0f}..{end_ns:.0f} ns "
+                 f"(trace: {trace['scheduled_ns'][0]:.0f}..{trace['scheduled_ns'][-1]:.0f} ns)")
+    return {k: v[keep] for k, v in trace.items()}
 
 
 def summarize(trace: dict, skip_ms: float = 200.0) -> dict:
@@ -149,20 +164,57 @@ def cyclictest_percentiles(us, counts, overflows, max_latency) -> dict:
             "max": float(max_latency) if max_latency is not None else float(us[counts > 0].max()), "n": int(total)}
 
 
+def cyclictest_result(text: str):
+    """(percentiles, (µs buckets, counts)) of a finished cyclictest -h run's output."""
+    us, counts, overflows, max_latency = parse_cyclictest_histogram(text)
+    return cyclictest_percentiles(us, counts, overflows, max_latency), (us, counts)
+
+
 def read_rig_rt(rig_path) -> dict:
-    """The [rt] settings cyclictest must share (priority, period_ns, cpu), via haptic-config's schema
-    defaults: priority 80, period 1 ms, no pinning."""
+    """The [rt] settings cyclictest must share (priority, period_ns, cpu) and the loop's wake phase,
+    with haptic-config's schema defaults: priority 80, period 1 ms, no pinning, phase period / 4."""
     import tomllib
     with open(rig_path, "rb") as f:
         rt = tomllib.load(f).get("rt", {})
-    return {"priority": int(rt.get("priority", 80)), "period_ns": int(rt.get("period_ns", 1_000_000)),
-            "cpu": int(rt.get("cpu", -1))}
+    period_ns = int(rt.get("period_ns", 1_000_000))
+    return {"priority": int(rt.get("priority", 80)), "period_ns": period_ns, "cpu": int(rt.get("cpu", -1)),
+            "wake_phase_ns": int(rt.get("wake_phase_ns", period_ns // 4))}
+
+
+def start_cyclictest(rt_settings: dict, cpu: int | None = None, duration_s: float | None = None, phase_ns: int | None = None,
+                     stdout=subprocess.PIPE, stderr=subprocess.PIPE):
+    """cyclictest as the loop runs: one thread, SCHED_FIFO at the rig's rt.priority, woken every
+    rt.period_ns, memory locked, a 1 µs histogram up to 2 ms (output at its end), on `cpu` (default
+    the rig's rt.cpu; -1: any). phase_ns: wake at this offset within each period on CLOCK_MONOTONIC
+    (--secaligned: from the next full second on, cyclictest_first_wake_s), else at a random phase.
+    Ends after duration_s, or when sent SIGINT (then it prints its histogram too). None when
+    cyclictest (rt-tests) is not installed."""
+    cyclictest = shutil.which("cyclictest")
+    if not cyclictest:
+        return None
+    cpu = rt_settings["cpu"] if cpu is None else cpu
+    args = [cyclictest, "-m", "-q", "-t1", f"-p{rt_settings['priority']}", f"-i{rt_settings['period_ns'] // 1000}",
+            "-h2000"]
+    if duration_s:
+        args.append(f"-D{int(round(duration_s))}")
+    if cpu >= 0:
+        args.append(f"-a{cpu}")
+    if phase_ns is not None:
+        args.append(f"--secaligned={phase_ns // 1000}")
+    return subprocess.Popen(args, stdout=stdout, stderr=stderr, text=True)
+
+
+def cyclictest_first_wake_s(started_s: float, rt_settings: dict, phase_ns: int) -> float:
+    """CLOCK_MONOTONIC second of the first wake-up of a --secaligned cyclictest started at
+    started_s: the next full second (the one after, within 100 ms of it), plus the offset, plus one
+    period (rt-tests 2.x)."""
+    second = math.floor(started_s) + (2 if started_s % 1.0 > 0.9 else 1)
+    return second + (phase_ns + rt_settings["period_ns"]) * 1e-9
 
 
 def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_devices=False, prefix=None):
     """Runs haptic-rt (+ stand-in sim) and cyclictest over the same window; returns cyclictest's stats."""
-    cyclictest = shutil.which("cyclictest")
-    if not cyclictest:
+    if not shutil.which("cyclictest"):
         sys.exit("latency_report: --with-cyclictest needs cyclictest (apt install rt-tests)")
     rt_settings = read_rig_rt(rig)
     build = pathlib.Path(build)
@@ -171,10 +223,6 @@ def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_de
                "--duration", str(duration_s), "--trace", str(trace_path)]
     if not real_devices:
         rt_args.append("--simulated-devices")
-    ct_args = [cyclictest, "-m", "-q", "-t1", f"-p{rt_settings['priority']}",
-               f"-i{rt_settings['period_ns'] // 1000}", f"-D{int(round(duration_s))}", "-h2000"]
-    if rt_settings["cpu"] >= 0:
-        ct_args.append(f"-a{rt_settings['cpu']}")
     print(f"latency_report: running haptic-rt and cyclictest for {duration_s:g} s "
           f"(SCHED_FIFO {rt_settings['priority']}, period {rt_settings['period_ns'] / 1e3:g} µs)", file=sys.stderr)
     rt_proc = subprocess.Popen(rt_args, stderr=subprocess.PIPE, text=True)
@@ -184,7 +232,8 @@ def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_de
         sim = subprocess.Popen([str(standin), "--shm-prefix", prefix, "--rate", str(sim_rate_hz), "--devices", "4",
                                 "--pattern", "sine", "--force", "0.5,0,0.5", "--stiffness", "300", "--damping", "2"],
                                stderr=subprocess.DEVNULL)
-    ct = subprocess.run(ct_args, capture_output=True, text=True, timeout=duration_s + 60)
+    ct = start_cyclictest(rt_settings, duration_s=duration_s)
+    ct_out, ct_err = ct.communicate(timeout=duration_s + 60)
     _, rt_err = rt_proc.communicate(timeout=duration_s + 60)
     if sim:
         sim.send_signal(signal.SIGTERM)
@@ -192,9 +241,9 @@ def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_de
     if rt_proc.returncode != 0:
         sys.exit(f"latency_report: haptic-rt failed ({rt_proc.returncode}):\n{rt_err}")
     if ct.returncode != 0:
-        sys.exit(f"latency_report: cyclictest failed ({ct.returncode}): {ct.stderr.strip()}")
-    us, counts, overflows, max_latency = parse_cyclictest_histogram(ct.stdout)
-    return cyclictest_percentiles(us, counts, overflows, max_latency), (us, counts), rt_err
+        sys.exit(f"latency_report: cyclictest failed ({ct.returncode}): {ct_err.strip()}")
+    stats, hist = cyclictest_result(ct_out)
+    return stats, hist, rt_err
 
 
 def format_report(summary: dict, cyclictest: dict | None = None) -> str:
@@ -235,6 +284,9 @@ def main(argv=None):
     p.add_argument("--duration", type=float, default=30.0, help="seconds, for --with-cyclictest")
     p.add_argument("--sim-rate", type=float, default=100.0, help="stand-in sim rate in Hz (0: no sim)")
     p.add_argument("--real-devices", action="store_true", help="open the rig's devices instead of simulating")
+    p.add_argument("--cyclictest-log", help="cyclictest -h output of a run beside the loop (start_cyclictest)")
+    p.add_argument("--window-ns", help="START:END, CLOCK_MONOTONIC ns: only the ticks scheduled in this window "
+                                       "(the one cyclictest ran); no --skip-ms then")
     args = p.parse_args(argv)
 
     cyclictest, cyclictest_hist = None, None
@@ -243,8 +295,25 @@ def main(argv=None):
             p.error("--with-cyclictest needs --rig RIG (haptic-rt and cyclictest run together)")
         cyclictest, cyclictest_hist, _ = run_with_cyclictest(args.trace, args.rig, args.build, args.duration,
                                                              args.sim_rate, args.real_devices)
+    elif args.cyclictest_log:
+        log = pathlib.Path(args.cyclictest_log)
+        if not log.exists():
+            sys.exit(f"latency_report: --cyclictest-log {log}: no such file")
+        cyclictest, cyclictest_hist = cyclictest_result(log.read_text())
+        if cyclictest["n"] == 0:
+            sys.exit(f"latency_report: --cyclictest-log {log}: no histogram in it (was cyclictest run with -h "
+                     f"and stopped by SIGINT or -D?)")
     trace = load_trace(args.trace)
-    summary = summarize(trace, args.skip_ms)
+    skip_ms = args.skip_ms
+    if args.window_ns:
+        try:
+            start_ns, end_ns = (float(v) for v in args.window_ns.split(":"))
+        except ValueError:
+            p.error(f"--window-ns {args.window_ns}: must be START:END in ns")
+        trace, skip_ms = select_window(trace, start_ns, end_ns), 0.0
+    summary = summarize(trace, skip_ms)
+    if args.window_ns:
+        summary["window_s"] = round((end_ns - start_ns) * 1e-9, 3)
     if cyclictest:
         summary["cyclictest_us"] = cyclictest
     print(format_report(summary, cyclictest))
