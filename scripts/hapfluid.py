@@ -478,7 +478,8 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
         # sim runs slower than real time and drops its backlog, and the device's curve has only the wall.
         plot = subprocess.run([py, str(ROOT / "scripts" / "plot_wrenches.py"), str(out / "sim" / "couplings.csv"),
                                str(dev_csv), "--out", str(out / "wrenches.png"), "--labels", "sim coupling,device (applied)",
-                               "--scene", scene_name, "--time", "wall", "--time-offset", str(summary.get("script_offset_s", 0)),
+                               "--scene", scene_name, "--time", "wall", f"--time-offset={summary.get('script_offset_s', 0)}",
+                               *[f"--hand={p}" for p in device_logs.values()], f"--hand-offset={lead_in_s}",
                                "--title", f"{scene_name}: wrench on the hand"], capture_output=True, text=True)
         if plot.returncode != 0:
             print("hapfluid: plot_wrenches failed:\n" + plot.stderr, file=sys.stderr)

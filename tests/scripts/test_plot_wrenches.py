@@ -50,18 +50,10 @@ def test_missing_columns_are_named(source_dir, tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
-def load_module(source_dir):
-    import importlib.util
-    spec = importlib.util.spec_from_file_location("plot_wrenches", source_dir / "scripts" / "plot_wrenches.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def test_each_scene_plots_the_components_its_figure_shows(source_dir):
+def test_each_scene_plots_the_components_its_figure_shows(source_dir, script):
     # Fig. 8b: a norm hides the sign, so stirring plots the stroke axis (x) and the torque about
     # the axis across it (y); the glass its spin axis (fig. 10); scenes without an entry the norms.
-    plot = load_module(source_dir)
+    plot = script("plot_wrenches")
     stirring = plot.scene_components("spoon_stirring")
     assert (stirring.force, stirring.torque) == ("x", "y") and "stroke" in stirring.force_meaning
     assert plot.scene_components("spinning_glass_40").torque == "z"
