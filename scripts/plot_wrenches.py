@@ -110,17 +110,26 @@ def component(data, prefix, which):
     return {"x": x, "y": y, "z": z}[which]
 
 
-def scripted_motions(scene: str) -> dict:
-    """{scene device: [(kind, start_s, stop_s)]} of config/scenes/<scene>.toml (or a scene file)."""
+def load_scene(scene: str) -> dict:
+    """config/scenes/<scene>.toml (or a scene file) as a dict; {} when there is none."""
     path = pathlib.Path(scene)
     if path.suffix != ".toml":
         path = SCENES / f"{scene}.toml"
-    if not path.is_file():
+    if not scene or not path.is_file():
         return {}
     with path.open("rb") as f:
-        devices = tomllib.load(f).get("devices", [])
+        return tomllib.load(f)
+
+
+def scripted_motions(scene: dict) -> dict:
+    """{scene device: [(kind, start_s, stop_s)]} of the scene's scripted hands."""
     return {d["name"]: [(m.get("kind", "motion"), float(m.get("start_s", 0.0)), float(m["stop_s"]))
-                        for m in d.get("motion", []) if "stop_s" in m] for d in devices}
+                        for m in d.get("motion", []) if "stop_s" in m] for d in scene.get("devices", [])}
+
+
+def held_bodies(scene: dict, device: str) -> str:
+    """"bowl" (or "bucket, ...") : what the scene couples the device to, for the column title."""
+    return ", ".join(c["body"] for c in scene.get("couplings", []) if c.get("device") == device)
 
 
 def mark_motions(ax, motions, label: bool):
@@ -188,7 +197,8 @@ def main():
     time_column = "t" if args.time == "sim" else "wall_s"
     runs = [read_wrenches(find_csv(p), time_column, o) for p, o in zip(args.runs, offsets)]
     devices = sorted({d for run in runs for d in run})
-    motions = scripted_motions(args.scene) if args.scene and on_script_clock else {}
+    scene = load_scene(args.scene)
+    motions = scripted_motions(scene) if on_script_clock else {}
     xlabel = {("sim", False): "simulated time (s)", ("wall", False): "wall-clock time since the sim started (s)",
               ("sim", True): "scene time: simulated time, 0 = the script's start (s)",
               ("wall", True): "scene time: the hand's clock, 0 = the script's start (s)"}[(args.time, on_script_clock)]
@@ -214,7 +224,8 @@ def main():
             # One zero line for both axes, so that "against the motion" reads as "opposite sides of it".
             for ax, top in ((force_ax, max(abs(v) for v in force_ax.get_ylim())), (velocity_ax, np.abs(v_hand).max())):
                 ax.set_ylim(-1.05 * top, 1.05 * top)
-        force_ax.set_title(device)
+        body = held_bodies(scene, device)
+        force_ax.set_title(f"{device} hand: {body}" if body else device)
         force_ax.set_ylabel(axis_label("force", chosen.force, chosen.force_meaning, "N"))
         torque_ax.set_ylabel(axis_label("torque", torque, torque_meaning, "N·m"))
         torque_ax.set_xlabel(xlabel)
