@@ -44,7 +44,6 @@ import tomllib
 import time
 
 import latency_report  # scripts/: cyclictest beside the loop, shared with latency_report.py --with-cyclictest
-import plot_wrenches  # scripts/: the per-scene plot components
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SCENES = ROOT / "config" / "scenes"
@@ -331,7 +330,7 @@ def run_live(args, scene_path, out, bin_dir):
     stack = Stack(out)
     print(f"hapfluid: live run of {scene_path.stem} for {duration:g} s on rig {rig_src.name} "
           f"(shm prefix {prefix}); logs in {out / 'logs'}", flush=True)
-    ok = True
+    ok, cyclictest = True, None
     device_logs = {}
     device_scene_path = device_scene(scene_path, out, args.lead_in, offsets)
     started = time.monotonic()
@@ -384,7 +383,7 @@ def run_live(args, scene_path, out, bin_dir):
     except RuntimeError as e:
         ok = False
         print(f"hapfluid: {e}", file=sys.stderr)
-    cyclictest_run = stop_cyclictest(cyclictest) if "cyclictest" in locals() else None
+    cyclictest_run = stop_cyclictest(cyclictest)
     codes = stack.stop_all(grace={"haptic-render": 8.0}, order=["haptic-render", "haptic-rt", "haptic-trace", "haptic-sim"] +
                            [n for n, _, _ in stack.procs if n.startswith("haptic-fake-device")])
     for name, code in codes.items():
@@ -495,7 +494,8 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
         rep = subprocess.run(report, capture_output=True, text=True)
         placement = ""
         if cyclictest:
-            same = "the loop's CPU" if cyclictest["cpu"] == cyclictest["loop_cpu"] else f"the loop is on CPU {cyclictest['loop_cpu']}"
+            same = ("the loop's CPU" if cyclictest["cpu"] == cyclictest["loop_cpu"]
+                    else f"the loop is on CPU {cyclictest['loop_cpu']}")
             placement = (f"cyclictest: CPU {cyclictest['cpu']} ({same}), SCHED_FIFO {cyclictest['priority']}, "
                          f"every {cyclictest['period_us']:g} µs at phase {cyclictest['phase_us']:g} µs (the loop's: "
                          f"{cyclictest['loop_phase_us']:g} µs), same window as the loop's ticks above\n")
@@ -582,8 +582,8 @@ def main():
         sys.exit(f"hapfluid: not built: {', '.join(missing)} (run `make`)")
 
     if args.batch:
-        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", args.backend, "--out", str(out / "sim"),
-                   "--export-every", str(args.export_every)]
+        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", args.backend,
+                   "--out", str(out / "sim"), "--export-every", str(args.export_every)]
         if args.duration:
             command += ["--duration", str(args.duration)]
         return subprocess.run(command).returncode

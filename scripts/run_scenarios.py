@@ -72,7 +72,9 @@ def run_scene(scene, run_dir, args) -> dict:
 def run_batch(scene, run_dir, args) -> bool:
     """The scene in batch mode beside its live run (scenario_checks.BATCH_DIR): the script in simulated time."""
     print(f"run_scenarios: {scene}: batch (the script at its own speed in simulated time)", file=sys.stderr, flush=True)
-    cmd = [str(pathlib.Path(args.build).resolve() / "bin" / "haptic-sim"), "--scene", str(ROOT / "config" / "scenes" / f"{scene}.toml"),
+    build = pathlib.Path(args.build)
+    build = build if build.is_absolute() else ROOT / build  # as hapfluid.py resolves it
+    cmd = [str(build / "bin" / "haptic-sim"), "--scene", str(ROOT / "config" / "scenes" / f"{scene}.toml"),
            "--out", str(run_dir / scenario_checks.BATCH_DIR), "--backend", "cpu", "--export-every", "0"]
     return subprocess.run(cmd).returncode == 0
 

@@ -28,8 +28,8 @@ def make_run(folder, source_dir, scene, wrench, end_s, device_log=None, batch=Fa
         make_run(folder / "batch-tmp", source_dir, scene, wrench, end_s)
         rows = (folder / "batch-tmp" / "sim" / "couplings.csv").read_text().splitlines()
         (folder / "batch").mkdir()
-        (folder / "batch" / "couplings.csv").write_text(
-            "\n".join([rows[0]] + [f"{float(r.split(',')[0]) - OFFSET_S:.4f}," + r.split(",", 1)[1] for r in rows[1:]]) + "\n")
+        shifted = [f"{float(r.split(',')[0]) - OFFSET_S:.4f}," + r.split(",", 1)[1] for r in rows[1:]]
+        (folder / "batch" / "couplings.csv").write_text("\n".join([rows[0]] + shifted) + "\n")
         wrench = lambda d, t: (0,) * 6  # noqa: E731  (the live history: no load anywhere)
     shutil.copy(source_dir / "config" / "scenes" / f"{scene}.toml", folder / "scene.toml")
     (folder / "summary.json").write_text(json.dumps({"script_offset_s": OFFSET_S, "lead_in_s": LEAD_IN_S}))
