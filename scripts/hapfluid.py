@@ -13,7 +13,7 @@ A live run starts, in this order:
   haptic-sim --live        the fluid, simulated time following the wall clock; its wrench fades in
   haptic-render --live     headless PNG frames (or a window with --windowed)
 and cyclictest (rt-tests) at the loop's priority and period beside them (cyclictest_placement); runs for
---duration seconds (default: the 1.5 s lead-in plus the scene's duration_s, 11.5 s for the default
+--duration seconds (default: the 3 s lead-in plus the scene's duration_s, 13 s for the default
 scene), stops them in reverse dependency order (render, loop, trace, sim, devices), checks every
 exit code and leaves under out/<scene>-<timestamp>/:
   device_<name>.csv        what the fake device felt (its per-tick log)
@@ -48,6 +48,7 @@ import latency_report  # scripts/: cyclictest beside the loop, shared with laten
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SCENES = ROOT / "config" / "scenes"
 RIGS = ROOT / "config" / "rigs"
+SETTLE_S = 0.5  # the sim's time before the script starts below which its fluid has not settled
 
 
 def resolve_scene(name: str) -> pathlib.Path:
@@ -260,19 +261,18 @@ class Stack:
 # cyclictest beside the live stack (summary: "1 kHz loop wake latency ... vs cyclictest ... in the
 # same window"): one thread at the loop's SCHED_FIFO priority and period (the rig's [rt]) on the
 # loop's own CPU (rt.cpu), so both see the same CPU's interrupts, ticks and neighbours: what the
-# kernel gives a FIFO thread there against what the loop gets. Two FIFO threads of one priority on
-# one CPU queue behind each other when their wake-ups meet, and on absolute 1 ms grids they meet
-# on every tick or never; cyclictest therefore wakes half a period away from the loop's
-# rt.wake_phase_ns (off the 4 ms scheduler tick too, like the loop), so they never meet. Measured
-# (spoon_stirring, 10 s runs, this 2-core VM loaded by other sessions; loop p50/p99/p99.9 µs):
-# without cyclictest 26.9/88/297, 38.5/92/144, 32.5/83/491, 26.0/68/4799; cyclictest on CPU 1 at a
-# random phase 26.0/82/321, 26.7/72/1370, half a period away 28.0/63/429, 24.7/78/139; cyclictest
-# on CPU 0 34.9/100/268, 47.9/92/351, 27.4/65/1056, 40.0/82/740. No disturbance of the loop shows
-# beyond the machine's noise either way; on CPU 1 cyclictest's own numbers track the loop's
-# (28/65/369, 24/55/127), on CPU 0 it measures the sim's CPU instead (p99.9 88 vs the loop's 351).
-def cyclictest_placement(rt: dict) -> tuple[int, int]:
-    """(cpu, phase_ns) for cyclictest beside a loop with the rig's rt settings (cpu -1: any)."""
-    return rt["cpu"], (rt["wake_phase_ns"] + rt["period_ns"] // 2) % rt["period_ns"]
+# kernel gives a FIFO thread there against what the loop gets. It does not disturb the loop
+# measurably (spoon_stirring, 10 s runs, this 2-core VM loaded by other sessions; loop
+# p50/p99/p99.9 µs): without cyclictest 26.9/88/297, 38.5/92/144, 32.5/83/491, 26.0/68/4799; with
+# it on CPU 1 26.0/82/321, 26.7/72/1370 (cyclictest there 29/112/326, 27/74/1360: it tracks the
+# loop); on CPU 0 instead 34.9/100/268, 47.9/92/351, 27.4/65/1056, 40.0/82/740, where cyclictest
+# measures the sim's CPU (p99.9 88 vs the loop's 351), not the loop's. The residual risk: both
+# sleep on absolute 1 ms grids and cyclictest's phase is random, so in the few runs in a hundred
+# where it lands within the loop's ~20 µs of work each tick one delays the other (cyclictest's own
+# work is ~2 µs); --cyclictest-cpu moves it.
+def cyclictest_placement(rt: dict) -> int:
+    """The CPU cyclictest runs on beside a loop with the rig's rt settings (-1: any)."""
+    return rt["cpu"]
 
 
 def read_device_log(path: pathlib.Path):
@@ -404,20 +404,17 @@ def start_cyclictest_beside(args, rig_path: pathlib.Path, out: pathlib.Path):
     if args.no_cyclictest:
         return None
     rt = latency_report.read_rig_rt(rig_path)
-    cpu, phase_ns = cyclictest_placement(rt)
-    cpu = args.cyclictest_cpu if args.cyclictest_cpu is not None else cpu
+    cpu = args.cyclictest_cpu if args.cyclictest_cpu is not None else cyclictest_placement(rt)
     stdout = open(out / "cyclictest.txt", "w")
     stderr = open(out / "logs" / "cyclictest.log", "w")
-    started_s = time.monotonic()  # CLOCK_MONOTONIC, as the trace's scheduled_ns
-    proc = latency_report.start_cyclictest(rt, cpu=cpu, phase_ns=phase_ns, stdout=stdout, stderr=stderr)
+    proc = latency_report.start_cyclictest(rt, cpu=cpu, stdout=stdout, stderr=stderr)
     if proc is None:
         stdout.close(), stderr.close()
         (out / "cyclictest.txt").unlink()
         print("hapfluid: note: cyclictest not installed (apt install rt-tests): loop latency without it", file=sys.stderr)
         return None
     return {"proc": proc, "files": (stdout, stderr), "cpu": cpu, "loop_cpu": rt["cpu"], "priority": rt["priority"],
-            "period_us": rt["period_ns"] / 1e3, "phase_us": phase_ns / 1e3, "loop_phase_us": rt["wake_phase_ns"] / 1e3,
-            "started_s": latency_report.cyclictest_first_wake_s(started_s, rt, phase_ns)}
+            "period_us": rt["period_ns"] / 1e3}
 
 
 def stop_cyclictest(run):
@@ -473,6 +470,9 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
         if shift:
             summary["script_offset_s"] = round(lead_in_s + min(shift.values()), 4)
             summary["lead_in_s"] = lead_in_s
+            if summary["script_offset_s"] < SETTLE_S:
+                summary["warning"] = (f"the scene's script started {summary['script_offset_s']:.2f} s after the sim's first "
+                                      f"step (< {SETTLE_S} s): its fluid had not settled; run with a longer --lead-in")
         # Against the wall clock (as the hand moves), not simulated time: the two differ when the
         # sim runs slower than real time and drops its backlog, and the device's curve has only the wall.
         plot = subprocess.run([py, str(ROOT / "scripts" / "plot_wrenches.py"), str(out / "sim" / "couplings.csv"),
@@ -488,25 +488,26 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
         report = [py, str(ROOT / "scripts" / "latency_report.py"), str(out / "trace.csv"),
                   "--png", str(out / "latency.png"), "--json", str(out / "latency.json")]
         if cyclictest:
-            # The loop's ticks of the window cyclictest ran in, nothing before or after it.
+            # The loop's ticks of the window cyclictest ran in, nothing before or after it: it takes
+            # one sample per period (a late wake still counts one), so it began N periods before it stopped.
+            samples = latency_report.cyclictest_result((out / "cyclictest.txt").read_text())[0]["n"]
+            started_ns = cyclictest["stopped_s"] * 1e9 - samples * cyclictest["period_us"] * 1e3
             report += ["--cyclictest-log", str(out / "cyclictest.txt"),
-                       "--window-ns", f"{cyclictest['started_s'] * 1e9:.0f}:{cyclictest['stopped_s'] * 1e9:.0f}"]
+                       "--window-ns", f"{started_ns:.0f}:{cyclictest['stopped_s'] * 1e9:.0f}"]
         rep = subprocess.run(report, capture_output=True, text=True)
         placement = ""
         if cyclictest:
             same = ("the loop's CPU" if cyclictest["cpu"] == cyclictest["loop_cpu"]
                     else f"the loop is on CPU {cyclictest['loop_cpu']}")
             placement = (f"cyclictest: CPU {cyclictest['cpu']} ({same}), SCHED_FIFO {cyclictest['priority']}, "
-                         f"every {cyclictest['period_us']:g} µs at phase {cyclictest['phase_us']:g} µs (the loop's: "
-                         f"{cyclictest['loop_phase_us']:g} µs), same window as the loop's ticks above\n")
+                         f"every {cyclictest['period_us']:g} µs, same window as the loop's ticks above\n")
         (out / "latency.txt").write_text(rep.stdout + placement + rep.stderr)
         if rep.returncode == 0 and (out / "latency.json").exists():
             lat = json.loads((out / "latency.json").read_text())
             summary["wake_latency_us"] = lat.get("wake_latency_us", lat)
             summary["cyclictest_us"] = lat.get("cyclictest_us")
             if cyclictest:
-                summary["cyclictest"] = {k: cyclictest[k] for k in ("cpu", "loop_cpu", "priority", "period_us", "phase_us",
-                                                                    "loop_phase_us")}
+                summary["cyclictest"] = {k: cyclictest[k] for k in ("cpu", "loop_cpu", "priority", "period_us")}
                 summary["cyclictest"]["window_s"] = lat.get("window_s")
         else:
             print("hapfluid: latency_report failed:\n" + rep.stderr, file=sys.stderr)
@@ -535,6 +536,8 @@ def print_summary(summary):
             print(f"  1 kHz loop wake latency (µs): {row(w)} (no cyclictest)")
     for n, f in summary.get("max_force_on_hand_n", {}).items():
         print(f"  max force on the hand '{n}': {f} N")
+    if "warning" in summary:
+        print(f"  WARNING: {summary['warning']}")
     print(f"  outputs: {summary['out']}")
 
 
@@ -551,7 +554,9 @@ def main():
     run.add_argument("--windowed", action="store_true", help="render in a window instead of PNG frames")
     run.add_argument("--no-render", action="store_true", help="run without the renderer")
     run.add_argument("--shm-prefix", default=None, help="shared-memory prefix (default: private to this run)")
-    run.add_argument("--lead-in", type=float, default=1.5,
+    # The stack takes 1.5-2.5 s to publish its first sample (auto's backend probe ~1 s, the loop's
+    # start, a loaded machine): at 1.5 s the stirring stroke began before the sim's first step.
+    run.add_argument("--lead-in", type=float, default=3.0,
                      help="seconds the fake hands hold still before their script starts (loop engages, fluid settles)")
     run.add_argument("--sim-threads", type=int, default=max(1, (os.cpu_count() or 2) - 1),
                      help="simulator threads (default: one core left for the loop and the devices)")
@@ -560,8 +565,7 @@ def main():
     run.add_argument("--no-cyclictest", action="store_true",
                      help="do not run cyclictest beside the loop (its latency is then reported alone)")
     run.add_argument("--cyclictest-cpu", type=int, default=None,
-                     help="CPU for cyclictest (default: the loop's rt.cpu, half a period out of phase with it; "
-                          "hapfluid.py cyclictest_placement)")
+                     help="CPU for cyclictest (default: the loop's rt.cpu; hapfluid.py cyclictest_placement)")
     run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")
     run.add_argument("--backend", choices=("auto", "vulkan", "cpu"), default="auto",
                      help="simulator backend (auto: Vulkan if it keeps up with the wall clock on this machine and "

@@ -20,7 +20,6 @@ tick's scheduled wake time; overruns are the periods the loop skipped while re-p
 """
 import argparse
 import json
-import math
 import os
 import pathlib
 import re
@@ -178,24 +177,23 @@ def cyclictest_result(text: str):
 
 
 def read_rig_rt(rig_path) -> dict:
-    """The [rt] settings cyclictest must share (priority, period_ns, cpu) and the loop's wake phase,
-    with haptic-config's schema defaults: priority 80, period 1 ms, no pinning, phase period / 4."""
+    """The [rt] settings cyclictest must share (priority, period_ns, cpu), via haptic-config's schema
+    defaults: priority 80, period 1 ms, no pinning."""
     import tomllib
     with open(rig_path, "rb") as f:
         rt = tomllib.load(f).get("rt", {})
-    period_ns = int(rt.get("period_ns", 1_000_000))
-    return {"priority": int(rt.get("priority", 80)), "period_ns": period_ns, "cpu": int(rt.get("cpu", -1)),
-            "wake_phase_ns": int(rt.get("wake_phase_ns", period_ns // 4))}
+    return {"priority": int(rt.get("priority", 80)), "period_ns": int(rt.get("period_ns", 1_000_000)),
+            "cpu": int(rt.get("cpu", -1))}
 
 
-def start_cyclictest(rt_settings: dict, cpu: int | None = None, duration_s: float | None = None, phase_ns: int | None = None,
+def start_cyclictest(rt_settings: dict, cpu: int | None = None, duration_s: float | None = None,
                      stdout=subprocess.PIPE, stderr=subprocess.PIPE):
     """cyclictest as the loop runs: one thread, SCHED_FIFO at the rig's rt.priority, woken every
     rt.period_ns, memory locked, a 1 µs histogram up to 2 ms (output at its end), on `cpu` (default
-    the rig's rt.cpu; -1: any). phase_ns: wake at this offset within each period on CLOCK_MONOTONIC
-    (--secaligned: from the next full second on, cyclictest_first_wake_s), else at a random phase.
-    Ends after duration_s, or when sent SIGINT (then it prints its histogram too). None when
-    cyclictest (rt-tests) is not installed."""
+    the rig's rt.cpu; -1: any). Ends after duration_s, or when sent SIGINT (then it prints its
+    histogram too). None when cyclictest (rt-tests) is not installed.
+    (--secaligned, to wake at a chosen phase, was tried: rt-tests 2.40 here counted 1.1 s of
+    samples too many after one start in four, so its window could not be known.)"""
     cyclictest = shutil.which("cyclictest")
     if not cyclictest:
         return None
@@ -206,17 +204,7 @@ def start_cyclictest(rt_settings: dict, cpu: int | None = None, duration_s: floa
         args.append(f"-D{int(round(duration_s))}")
     if cpu >= 0:
         args.append(f"-a{cpu}")
-    if phase_ns is not None:
-        args.append(f"--secaligned={phase_ns // 1000}")
     return subprocess.Popen(args, stdout=stdout, stderr=stderr, text=True)
-
-
-def cyclictest_first_wake_s(started_s: float, rt_settings: dict, phase_ns: int) -> float:
-    """CLOCK_MONOTONIC second of the first wake-up of a --secaligned cyclictest started at
-    started_s: the next full second (the one after, within 100 ms of it), plus the offset, plus one
-    period (rt-tests 2.x)."""
-    second = math.floor(started_s) + (2 if started_s % 1.0 > 0.9 else 1)
-    return second + (phase_ns + rt_settings["period_ns"]) * 1e-9
 
 
 def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_devices=False, prefix=None):

@@ -128,7 +128,7 @@ def scripted_motions(scene: dict) -> dict:
 
 
 def held_bodies(scene: dict, device: str) -> str:
-    """"bowl" (or "bucket, ...") : what the scene couples the device to, for the column title."""
+    """What the scene couples the device to ("bowl"), for the column title "left (bowl)"."""
     return ", ".join(c["body"] for c in scene.get("couplings", []) if c.get("device") == device)
 
 
@@ -225,7 +225,7 @@ def main():
             for ax, top in ((force_ax, max(abs(v) for v in force_ax.get_ylim())), (velocity_ax, np.abs(v_hand).max())):
                 ax.set_ylim(-1.05 * top, 1.05 * top)
         body = held_bodies(scene, device)
-        force_ax.set_title(f"{device} hand: {body}" if body else device)
+        force_ax.set_title(f"{device} ({body})" if body else device)
         force_ax.set_ylabel(axis_label("force", chosen.force, chosen.force_meaning, "N"))
         torque_ax.set_ylabel(axis_label("torque", torque, torque_meaning, "N·m"))
         torque_ax.set_xlabel(xlabel)

@@ -11,8 +11,8 @@ with its figure and its qualitative result checked (scenario_checks.py):
 
     run_scenarios.py [--only stirring,glass,...] [--build build] [--out out/scenarios] [--render] [--duration S]
 
-Each scene runs live for its whole script (hapfluid.py's default duration: the lead-in, here 3 s
-so the stack is up and the fluid settled before the script starts, plus the scene's duration_s).
+Each scene runs live for its whole script (hapfluid.py's default duration: the 3 s lead-in, so
+the stack is up and the fluid settled before the script starts, plus the scene's duration_s).
 The figures are drawn against the hands' clock (scene time, the script's motions shaded).
 
 The heavy scenes run slower than real time on a small machine: the sim drops its backlog and says
@@ -50,7 +50,7 @@ SCENARIOS = {
     "crepe": (["crepe"], "crepe.png", "§6.5: crepe, batter poured from the bowl into the pan and spread"),
 }
 LIVE_RTF_FOR_PHYSICS = 0.9
-LEAD_IN_S = 3.0  # auto's backend probe and the loop's start take ~2 s: the script starts on a settled fluid
+LEAD_IN_S = 3.0  # as hapfluid.py's default; the plots' --hand-offset
 LIVE_ONLY = {"stirring"}
 SUMMARY_KEYS = ("ok", "sim_backend", "sim_steps_per_s", "real_time_factor", "sim_kept_up", "fluid_particles",
                 "max_force_on_hand_n", "wake_latency_us", "cyclictest_us", "script_offset_s")

@@ -41,16 +41,17 @@ def csv_rows(path):
 
 @pytest.fixture(scope="module")
 def rendered_run(build_dir, tmp_path_factory):
-    """One short run as `make run` makes it: renderer on, VTK frames, cyclictest beside the loop."""
+    """One short run as `make run` makes it: renderer on, VTK frames, cyclictest beside the loop
+    (a 1 s lead-in: the outputs are judged here, not the settled fluid)."""
     out = tmp_path_factory.mktemp("launcher") / "run"
-    result = launch(build_dir, out, "--duration", "5", "--backend", "cpu")
+    result = launch(build_dir, out, "--duration", "5", "--backend", "cpu", "--lead-in", "1")
     assert result.returncode == 0, result.stdout + result.stderr
     return out, result, json.loads((out / "summary.json").read_text())
 
 
 def test_a_short_live_run_leaves_its_outputs_and_nothing_else(build_dir, tmp_path):
     out = tmp_path / "run"
-    result = launch(build_dir, out, "--duration", "3", "--no-render", "--no-cyclictest")
+    result = launch(build_dir, out, "--duration", "3", "--no-render", "--no-cyclictest", "--lead-in", "1")
     assert result.returncode == 0, result.stdout + result.stderr
     for name in ("device_hand.csv", "sim/couplings.csv", "sim/bodies.csv", "sim/stats.json", "wrenches.png",
                  "trace.csv", "latency.png", "latency.json", "summary.json"):
@@ -94,7 +95,7 @@ def test_the_vtk_particle_frames_parse_and_hold_the_whole_fluid(rendered_run):
     out, result, summary = rendered_run
     frames = sorted((out / "sim" / "particles").glob("frame_*.vtk"))
     stats = json.loads((out / "sim" / "stats.json").read_text())
-    assert len(frames) >= 3 and summary["vtk_frames"] == len(frames) == stats["vtk_frames_written"]
+    assert len(frames) >= 2 and summary["vtk_frames"] == len(frames) == stats["vtk_frames_written"]
     assert f"VTK particle frames: {len(frames)}" in result.stdout
     assert len(frames) >= int(stats["simulated_time_s"] / VTK_EVERY_S), "fewer frames than the simulated time asks"
     times = []
@@ -127,18 +128,20 @@ def test_the_csv_histories_have_their_columns_and_rows(rendered_run):
 
 @pytest.mark.skipif(not shutil.which("cyclictest"), reason="cyclictest (rt-tests) not installed")
 def test_the_loop_latency_is_reported_beside_cyclictest_from_the_same_window(rendered_run):
-    # Same window: the loop's ticks counted are those scheduled while cyclictest ran (1 kHz both),
-    # so the two tick counts agree to a few periods of start-up.
+    # Same window: the loop's ticks counted are those scheduled while cyclictest ran (1 kHz both).
+    # cyclictest takes one sample per period even when late; the loop skips the periods of a stall
+    # (overruns: a 95 ms VM stall cost 99), so its ticks plus its overruns fill the window.
     out, result, summary = rendered_run
     loop, ct, placement = summary["wake_latency_us"], summary["cyclictest_us"], summary["cyclictest"]
+    lat = json.loads((out / "latency.json").read_text())
     for p in (loop, ct):
         assert p["p50"] <= p["p99"] <= p["p99.9"] <= p["max"] and p["p50"] > 0
-    assert placement["priority"] == 80 and placement["period_us"] == 1000 and placement["loop_cpu"] == 1
-    assert abs(loop["n"] - placement["window_s"] * 1000) < 50 and abs(ct["n"] - loop["n"]) < 50, (loop["n"], ct["n"])
+    assert placement["priority"] == 80 and placement["period_us"] == 1000 and placement["cpu"] == placement["loop_cpu"] == 1
+    assert abs(loop["n"] + lat["overruns"] - ct["n"]) < 20, (loop["n"], lat["overruns"], ct["n"])
+    assert ct["n"] == round(placement["window_s"] * 1000) and placement["window_s"] > 2
     assert "vs cyclictest in the same" in result.stdout and re.search(r"cyclictest \(CPU \d\)\s+p50", result.stdout)
     text = (out / "latency.txt").read_text()
     assert "wake latency (µs)" in text and "cyclictest (µs)" in text and f"CPU {placement['cpu']}" in text
-    lat = json.loads((out / "latency.json").read_text())
     assert lat["cyclictest_us"] == ct and lat["window_s"] == placement["window_s"]
 
 
