@@ -7,6 +7,8 @@ import subprocess
 import sys
 import pathlib
 
+import pytest
+
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from vtk_reader import read_vtk  # noqa: E402
 
@@ -136,6 +138,59 @@ def test_bad_scene_fails_clearly_without_complete_outputs(binary, tmp_path):
     assert "bodies.paddle: the body overlaps the domain wall x_min" in result.stderr
     assert not (out / "stats.json").exists()
     assert not (out / "bodies.csv").exists()
+
+
+def snapshot(folder: pathlib.Path) -> dict:
+    """Every file under folder, by relative path, with its bytes."""
+    return {str(f.relative_to(folder)): f.read_bytes() for f in sorted(folder.rglob("*")) if f.is_file()}
+
+
+def complete_run(binary, tmp_path, *extra) -> pathlib.Path:
+    out = tmp_path / "out"
+    result = run(binary, write_scene(tmp_path / "scene"), out, *extra)
+    assert result.returncode == 0, result.stderr
+    assert json.loads((out / "stats.json").read_text())["complete"] is True
+    return out
+
+
+BAD_SCENES = {
+    # load_scene refuses it (config error: file, line, key, value, reason)
+    "load": (("particle_spacing_m = 0.01", "particle_spacing_m = -0.01"),
+             "fluid.particle_spacing_m = -0.01: must be > 0"),
+    # load_scene accepts it, build_model refuses it
+    "build": (("position_m = [0.06, 0.03, 0.03]", "position_m = [0.0005, 0.03, 0.03]"),
+              "bodies.paddle: the body overlaps the domain wall x_min"),
+}
+
+
+@pytest.mark.parametrize("stage", sorted(BAD_SCENES))
+def test_rerun_with_a_bad_scene_leaves_the_previous_complete_run_untouched(binary, tmp_path, stage):
+    # A typo in the scene must not cost the user the run already in the folder: the new run
+    # fails before it touches DIR, and what is there is still the previous run, complete.
+    out = complete_run(binary, tmp_path, "--export-every", "0.05")
+    before = snapshot(out)
+    assert "particles/frame_000002.vtk" in before and "bodies.csv" in before
+    (old, new), message = BAD_SCENES[stage]
+    bad = write_scene(tmp_path / "bad", SCENE.replace(old, new))
+    result = run(binary, bad, out)
+    assert result.returncode == 1
+    assert message in result.stderr
+    assert str(bad) in result.stderr  # the file to fix
+    assert snapshot(out) == before
+    assert json.loads((out / "stats.json").read_text())["complete"] is True
+
+
+def test_rerun_that_succeeds_keeps_no_frame_of_the_previous_run(binary, tmp_path):
+    # The previous run exported more frames than this one: none of them may remain.
+    out = complete_run(binary, tmp_path, "--export-every", "0.01")
+    assert len(list((out / "particles").glob("*.vtk"))) == 11
+    result = run(binary, write_scene(tmp_path / "scene"), out, "--export-every", "0.05")
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((out / "stats.json").read_text())
+    assert stats["complete"] is True and stats["frames_exported"] == 3
+    assert [f.name for f in sorted((out / "particles").iterdir())] == \
+        ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
+    assert not list(out.rglob("*.part"))
 
 
 def test_missing_arguments_print_usage(binary):
