@@ -180,6 +180,31 @@ def test_rerun_with_a_bad_scene_leaves_the_previous_complete_run_untouched(binar
     assert json.loads((out / "stats.json").read_text())["complete"] is True
 
 
+def test_rerun_that_diverges_midway_leaves_nothing_that_looks_complete(binary, source_dir, tmp_path):
+    # The drop diverges on reaching the floor at t = 0.12 s (scenes/diverging_drop.toml), after
+    # it has written frames: the previous run's outputs are gone, stats.json says the run did not
+    # complete and why, the CSVs are .part only, and every frame is the new run's.
+    out = complete_run(binary, tmp_path, "--export-every", "0.01")
+    assert len(list((out / "particles").glob("*.vtk"))) == 11
+    scene = source_dir / "tests/sim_gpu/scenes/diverging_drop.toml"
+    result = run(binary, scene, out, "--export-every", "0.05")
+    assert result.returncode == 1, result.stderr
+    assert "haptic-sim: error: simulation diverged at t = 0.12 s: fluid particle " in result.stderr
+    assert "is not finite: lower time.dt_s (0.001 s; 0 chooses a stable CFL step), or the stiffness" in result.stderr
+    stats = json.loads((out / "stats.json").read_text())
+    assert stats["complete"] is False
+    assert stats["error"].startswith("simulation diverged at t = 0.12 s: fluid particle ")
+    assert stats["scene"] == str(scene) and stats["particles"]["fluid"] == 8
+    assert stats["steps"] == 110  # 11 frames of 10 steps passed the check; the 12th did not
+    assert not (out / "bodies.csv").exists() and not (out / "couplings.csv").exists()
+    assert (out / "bodies.csv.part").exists() and (out / "couplings.csv.part").exists()
+    frames = sorted((out / "particles").glob("*.vtk"))
+    assert [f.name for f in frames] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
+    assert stats["frames_exported"] == 3
+    for f in frames:
+        assert read_vtk(f)["points"].shape[0] == stats["particles"]["total"], f.name
+
+
 def test_rerun_that_succeeds_keeps_no_frame_of_the_previous_run(binary, tmp_path):
     # The previous run exported more frames than this one: none of them may remain.
     out = complete_run(binary, tmp_path, "--export-every", "0.01")
