@@ -166,8 +166,8 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
 }  // namespace
 
 int run_live(const LiveOptions& o, std::ostream& log) {
-  if (o.threads < 1 || o.threads > 256) {
-    log << "haptic-sim: --threads " << o.threads << ": must be 1..256\n";
+  if (o.threads < 1 || o.threads > kMaxWorkerThreads) {
+    log << "haptic-sim: --threads " << o.threads << ": must be 1.." << kMaxWorkerThreads << "\n";
     return 2;
   }
   std::string prefix = o.shm_prefix, group;

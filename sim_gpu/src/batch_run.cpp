@@ -62,7 +62,8 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   }
   if (o.backend != "cpu")
     throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only (use cpu or auto)");
-  if (o.threads < 1 || o.threads > 256) throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1..256");
+  if (o.threads < 1 || o.threads > kMaxWorkerThreads)
+    throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1.." + std::to_string(kMaxWorkerThreads));
   const config::Scene scene = config::load_scene(o.scene);
   const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;
   // The scene loads and builds before the output folder is touched: a bad scene leaves a

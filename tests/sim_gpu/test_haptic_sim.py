@@ -222,3 +222,42 @@ def test_missing_arguments_print_usage(binary):
     result = subprocess.run([str(binary("haptic-sim"))], capture_output=True, text=True)
     assert result.returncode == 2
     assert "--scene and --out are required" in result.stderr
+
+
+@pytest.mark.parametrize("option, value, reason", [
+    # Integer options take whole numbers only: 2.5 threads was silently run as 2.
+    ("--threads", "2.5", "must be a whole number in 1..256"),
+    ("--threads", "2threads", "not a number (must be a whole number in 1..256)"),
+    ("--threads", " 2", "not a number (must be a whole number in 1..256)"),
+    ("--threads", "-1", "must be a whole number in 1..256"),
+    ("--threads", "0", "must be a whole number in 1..256"),
+    ("--threads", "1e2", "must be a whole number in 1..256"),
+    ("--threads", "99999999999", "must be a whole number in 1..256"),
+    # Durations are finite seconds.
+    ("--duration", "inf", "must be a finite number of seconds > 0"),
+    ("--duration", "nan", "must be a finite number of seconds > 0"),
+    ("--duration", "-0.1", "must be > 0 s"),
+    ("--duration", "0", "must be > 0 s"),
+    ("--duration", "1s", "not a number (must be a number of seconds > 0)"),
+    ("--export-every", "-0.01", "must be >= 0 s"),
+    ("--export-every", "inf", "must be a finite number of seconds >= 0"),
+])
+def test_numeric_options_are_strict_and_name_option_and_value(binary, tmp_path, option, value, reason):
+    scene = write_scene(tmp_path / "scene")
+    result = run(binary, scene, tmp_path / "out", option, value)
+    assert result.returncode == 2
+    assert f"haptic-sim: {option} {value}: {reason}\n" in result.stderr
+    assert not (tmp_path / "out").exists()  # refused before anything ran
+
+
+@pytest.mark.parametrize("option, value, reason", [
+    ("--threads", "1.5", "must be a whole number in 1..256"),
+    ("--duration", "inf", "must be a finite number of seconds >= 0"),
+    ("--max-lag", "0", "must be >= 0.001 s"),
+    ("--status-every", "-1", "must be >= 0 s"),
+])
+def test_live_numeric_options_are_strict_too(binary, tmp_path, option, value, reason):
+    result = subprocess.run([str(binary("haptic-sim")), "--live", "--scene", str(write_scene(tmp_path / "scene")),
+                             option, value], capture_output=True, text=True, timeout=30)
+    assert result.returncode == 2
+    assert f"haptic-sim: {option} {value}: {reason}\n" in result.stderr
