@@ -152,14 +152,17 @@ TEST(RigidBody, TorqueFreeBoxTumblesConservingAngularMomentumAndEnergy) {
   // its intermediate principal axis, which is unstable: it tumbles (Dzhanibekov), the spin seen
   // in the box's own axes turns over while the world angular momentum L = I_world(q) w of eq. 13
   // must stay put. The leap-frog step carries L itself (w = I_world^-1 L after each rotation), so L
-  // is exact up to rounding; the orientation update exp(w dt) q is explicit, so the rotational
-  // energy 1/2 w . L drifts with dt.
+  // is exact up to rounding; the orientation update exp(w dt) q is explicit (first order), so the
+  // rotational energy 1/2 w . L drifts, by steps while the box turns over. A fixed 1 ms step (no
+  // fluid to limit it): 3000 steps, which the Vulkan run of this test also affords.
   const auto dir = test::temp_dir("tumble");
   const auto scene = test::write_scene(dir, "name = \"tumble\"\n" + domain(0, 0, 0, 0.4, 0.4, 0.4) + R"(
 [fluid]
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 gravity_m_s2 = [0.0, 0.0, 0.0]
+[time]
+dt_s = 0.001
 [[bodies]]
 name = "box"
 mesh = "box.obj"
@@ -191,9 +194,10 @@ density_kg_m3 = 700.0
             << ", energy drift " << worst_e << ", |q| - 1 " << worst_unit << "\n";
   EXPECT_GT(w_l_angle, 0.05);         // rad: not a principal axis, so w and L differ
   EXPECT_GT(widest_w_turn, 0.75 * kPi);  // it turns over
-  EXPECT_LT(worst_l, 1e-9);  // measured 4.9e-12: rounding
-  // Measured 1.7e-3 over 10500 steps of 0.29 ms (1.1e-3 at 2/3 of the step: first order in dt).
-  EXPECT_LT(worst_e, 5e-3);
+  EXPECT_LT(worst_l, 1e-9);  // measured 1.4e-12: rounding
+  // Measured +0.77% after 3 s, gained mostly during the turn-overs (+0.36% by t = 1 s); first
+  // order in dt: +0.17% with the 0.29 ms CFL step, +0.11% with 0.19 ms.
+  EXPECT_LT(worst_e, 0.02);
   EXPECT_LT(worst_unit, 1e-12);
   EXPECT_NEAR(norm(b.position - Vec3{0.18 + 0.02, 0.17 + 0.03, 0.15 + 0.05}), 0.0, 1e-12);  // no force: the centre stays
   EXPECT_NEAR(norm(b.contact_force), 0.0, 1e-12);  // it touched nothing
