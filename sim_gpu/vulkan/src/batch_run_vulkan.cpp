@@ -74,7 +74,7 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
            << solver.device().driver << ")\n";
 
   std::filesystem::create_directories(o.out / "particles");
-  std::filesystem::remove(o.out / "stats.json");
+  remove_previous_outputs(o.out);  // only now: a scene or device that fails leaves a previous run as it was
   CsvFile bodies_csv(o.out / "bodies.csv", kBodiesCsvHeader);
   CsvFile couplings_csv(o.out / "couplings.csv", kCouplingsCsvHeader);
 
@@ -136,6 +136,8 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
       }
     }
     solver.check_finite();
+    bodies_csv.finish();
+    couplings_csv.finish();
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -144,8 +146,6 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
     write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, false, error));
     throw std::runtime_error(error);
   }
-  bodies_csv.finish();
-  couplings_csv.finish();
   write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, true, ""));
   return r;
 }

@@ -43,6 +43,12 @@ std::string coupling_row(const SimulationModel& model, const VirtualCoupling& co
 // Writes text to file atomically (temporary name, then rename).
 void write_text_atomically(const std::filesystem::path& file, const std::string& text);
 
+// Removes what a previous run left in the output folder `dir`, stats.json first (from then on
+// nothing there claims a complete run), then bodies.csv, couplings.csv (and their .part) and
+// the frames in particles/ (*.vtk, *.part). A run calls it once its scene has loaded and built,
+// just before it writes: a scene that fails leaves the previous run's outputs untouched.
+void remove_previous_outputs(const std::filesystem::path& dir);
+
 std::string json_escape(const std::string& text);
 
 }  // namespace hapfluid::sim
