@@ -2,6 +2,7 @@
 #include "hapfluid/config/scene.hpp"
 
 #include <algorithm>
+#include <map>
 #include <set>
 
 #include "hapfluid/config/mesh.hpp"
@@ -320,7 +321,24 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
     scene.devices.push_back(read_device(d));
     unique(d, scene.devices.back().name, "device");
   }
-  for (auto& c : r.tables("couplings")) scene.couplings.push_back(read_coupling(c, scene));
+  // N devices may hold one body (bimanual, §6.4.4), but a device holds one body: its wrench is
+  // the reaction of a single coupling.
+  std::map<std::string, std::size_t> first_coupling_of_device;
+  for (auto& c : r.tables("couplings")) {
+    scene.couplings.push_back(read_coupling(c, scene));
+    const Coupling& added = scene.couplings.back();
+    if (added.device.empty()) continue;
+    const auto [held, fresh] = first_coupling_of_device.try_emplace(added.device, scene.couplings.size() - 1);
+    if (fresh) continue;
+    const Coupling& first = scene.couplings[held->second];
+    const std::string first_name = "couplings[" + std::to_string(held->second) + "]";
+    if (first.body == added.body)
+      c.problem("device", "already holds body \"" + first.body + "\" (" + first_name +
+                              "): one coupling per device and body; remove one of the two");
+    else
+      c.problem("device", "already holds body \"" + first.body + "\" (" + first_name + "): a device holds one body; give \"" +
+                              added.body + "\" its own [[devices]] entry, or couple it to a device that holds nothing");
+  }
   r.finish();
   diag.throw_if_any();
   return scene;

@@ -2,12 +2,12 @@
 
 #include <unistd.h>
 
-#include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <iostream>
 #include <string>
 
+#include "hapfluid/sim/command_line_numbers.hpp"
+#include "hapfluid/sim/thread_pool.hpp"
 #include "live_runner.hpp"
 
 namespace hapfluid::sim {
@@ -37,16 +37,6 @@ void usage(std::ostream& out) {
          "scene device named N (sim_gpu/live/README.md).\n";
 }
 
-bool number(const std::string& flag, const char* text, double& out, double lo) {
-  char* end = nullptr;
-  out = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(out) || out < lo) {
-    std::cerr << "haptic-sim: " << flag << " " << text << ": must be a number >= " << lo << "\n";
-    return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 bool wants_live(int argc, char** argv) {
@@ -67,7 +57,6 @@ int live_main(int argc, char** argv) {
       return usage(std::cerr), 2;
     }
     const char* v = argv[++i];
-    double x = 0;
     if (a == "--scene") o.scene = v;
     else if (a == "--rig") o.rig = v;
     else if (a == "--shm-prefix") o.shm_prefix = v;
@@ -75,16 +64,15 @@ int live_main(int argc, char** argv) {
     else if (a == "--backend") o.backend = v;
     else if (a == "--vk-device") o.vulkan_device = v;
     else if (a == "--duration") {
-      if (!number(a, v, o.duration_s, 0)) return 2;
+      if (!accepted(std::cerr, a, v, parse_seconds(v, 0, false, o.duration_s))) return 2;
     } else if (a == "--threads") {
-      if (!number(a, v, x, 1)) return 2;
-      o.threads = static_cast<int>(x);
+      if (!accepted(std::cerr, a, v, parse_whole_number(v, 1, kMaxWorkerThreads, o.threads))) return 2;
     } else if (a == "--max-lag") {
-      if (!number(a, v, o.max_lag_s, 0.001)) return 2;
+      if (!accepted(std::cerr, a, v, parse_seconds(v, 0.001, false, o.max_lag_s))) return 2;
     } else if (a == "--export-every") {
-      if (!number(a, v, o.export_every_s, 0)) return 2;
+      if (!accepted(std::cerr, a, v, parse_seconds(v, 0, false, o.export_every_s))) return 2;
     } else if (a == "--status-every") {
-      if (!number(a, v, o.status_every_s, 0)) return 2;
+      if (!accepted(std::cerr, a, v, parse_seconds(v, 0, false, o.status_every_s))) return 2;
     } else {
       std::cerr << "haptic-sim: unknown option " << a << " (live mode)\n";
       return usage(std::cerr), 2;

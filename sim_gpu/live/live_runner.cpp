@@ -174,8 +174,8 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
 }  // namespace
 
 int run_live(const LiveOptions& o, std::ostream& log) {
-  if (o.threads < 1 || o.threads > 256) {
-    log << "haptic-sim: --threads " << o.threads << ": must be 1..256\n";
+  if (o.threads < 1 || o.threads > kMaxWorkerThreads) {
+    log << "haptic-sim: --threads " << o.threads << ": must be 1.." << kMaxWorkerThreads << "\n";
     return 2;
   }
   if (o.export_every_s > 0 && o.out.empty()) {
@@ -241,7 +241,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   try {
     if (!o.out.empty()) {
       std::filesystem::create_directories(o.out);
-      std::filesystem::remove(o.out / "stats.json");  // never mistaken for this run's until it ends
+      remove_previous_outputs(o.out);  // no earlier run's stats.json, CSVs or frames pass for this run's
       couplings_csv.emplace(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick,publish_ns");
       bodies_csv.emplace(o.out / "bodies.csv", kBodiesCsvHeader);
       if (o.export_every_s > 0) vtk_frames.emplace(o.out / "particles", o.export_every_s);

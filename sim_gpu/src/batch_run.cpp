@@ -62,17 +62,18 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   }
   if (o.backend != "cpu")
     throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only (use cpu or auto)");
-  if (o.threads < 1 || o.threads > 256) throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1..256");
+  if (o.threads < 1 || o.threads > kMaxWorkerThreads)
+    throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1.." + std::to_string(kMaxWorkerThreads));
   const config::Scene scene = config::load_scene(o.scene);
   const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;
-
-  std::filesystem::create_directories(o.out);
-  // A previous run's statistics must not pass for this run's until this run completes.
-  std::filesystem::remove(o.out / "stats.json");
-  VtkFrameSeries vtk_frames(o.out / "particles", o.export_every_s);
-
+  // The scene loads and builds before the output folder is touched: a bad scene leaves a
+  // previous run there as it was. From here on, nothing of the previous run may remain to pass
+  // for this run's outputs.
   CpuSolver solver(build_model(scene), o.threads);
   const SimulationModel& m = solver.model();
+  std::filesystem::create_directories(o.out / "particles");
+  remove_previous_outputs(o.out);
+  VtkFrameSeries vtk_frames(o.out / "particles", o.export_every_s);
   CsvFile bodies_csv(o.out / "bodies.csv", kBodiesCsvHeader);
   CsvFile couplings_csv(o.out / "couplings.csv", kCouplingsCsvHeader);
 
@@ -119,6 +120,8 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
         progress << (o.progress_line ? "\r" : "") << line << (o.progress_line && k + 1 < frames ? "" : "\n") << std::flush;
       }
     }
+    bodies_csv.finish();
+    couplings_csv.finish();
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -127,8 +130,6 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
     write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, false, error));
     throw std::runtime_error(error);
   }
-  bodies_csv.finish();
-  couplings_csv.finish();
   write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, true, ""));
   return r;
 }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "hapfluid/sim/contact_damping.hpp"
+#include "hapfluid/sim/finite_state.hpp"
 #include "sph_passes.hpp"
 
 namespace hapfluid::sim {
@@ -342,18 +343,6 @@ void CpuSolver::step(double dt) {
   ++steps_;
 }
 
-void CpuSolver::check_finite() const {
-  const FluidParticles& f = m_.fluid;
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (!std::isfinite(f.x[i]) || !std::isfinite(f.y[i]) || !std::isfinite(f.z[i]) || !std::isfinite(f.vx[i]) ||
-        !std::isfinite(f.vy[i]) || !std::isfinite(f.vz[i]))
-      throw std::runtime_error("simulation diverged at t = " + std::to_string(time_s_) + " s: fluid particle " +
-                               std::to_string(f.id[i]) +
-                               " has a non-finite position or velocity (lower time.cfl or time.max_dt_s, or the stiffness)");
-  for (const RigidBody& b : m_.bodies)
-    if (!finite(b.position) || !finite(b.linear_velocity) || !finite(b.angular_velocity))
-      throw std::runtime_error("simulation diverged at t = " + std::to_string(time_s_) + " s: body " + b.name +
-                               " has a non-finite state (lower time.cfl or time.max_dt_s, or the coupling gains)");
-}
+void CpuSolver::check_finite() const { check_finite_state(m_, time_s_); }
 
 }  // namespace hapfluid::sim

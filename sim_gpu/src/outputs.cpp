@@ -42,6 +42,19 @@ void write_text_atomically(const std::filesystem::path& file, const std::string&
   std::filesystem::rename(part, file);
 }
 
+void remove_previous_outputs(const std::filesystem::path& dir) {
+  std::filesystem::remove(dir / "stats.json");
+  std::filesystem::remove(dir / "stats.json.part");
+  for (const char* csv : {"bodies.csv", "couplings.csv"}) {
+    std::filesystem::remove(dir / csv);
+    std::filesystem::remove(dir / (std::string(csv) + ".part"));
+  }
+  const std::filesystem::path frames = dir / "particles";
+  if (!std::filesystem::is_directory(frames)) return;
+  for (const auto& entry : std::filesystem::directory_iterator(frames))
+    if (entry.path().extension() == ".vtk" || entry.path().extension() == ".part") std::filesystem::remove(entry.path());
+}
+
 void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m, double time_s) {
   const FluidParticles& f = m.fluid;
   const SortedSolids& st = m.static_solids;
@@ -95,10 +108,7 @@ void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m
 
 VtkFrameSeries::VtkFrameSeries(std::filesystem::path dir, double interval_s)
     : dir_(std::move(dir)), interval_s_(interval_s) {
-  if (interval_s_ <= 0) return;
-  std::filesystem::create_directories(dir_);
-  for (const auto& entry : std::filesystem::directory_iterator(dir_))
-    if (entry.path().extension() == ".vtk" || entry.path().extension() == ".part") std::filesystem::remove(entry.path());
+  if (interval_s_ > 0) std::filesystem::create_directories(dir_);
 }
 
 void VtkFrameSeries::write(const SimulationModel& model, double time_s) {

@@ -195,10 +195,16 @@ SimulationModel build_model(const config::Scene& scene) {
     const config::Aabb bounds = config::transformed_bounds(mesh, cb.scale, config::Pose{});
     const double extent = std::max({bounds.max_m.x - bounds.min_m.x, bounds.max_m.y - bounds.min_m.y,
                                     bounds.max_m.z - bounds.min_m.z});
-    if (samples.size() < 8 || extent < 3 * spacing)
+    // In the mesh's own frame: the loader's check (config/src/scene.cpp) sees the placed bounds,
+    // which a rotation widens.
+    if (extent < 3 * spacing)
       fail(scene, "bodies." + cb.name + ": particle spacing " + fmt(spacing) + " m is too large for the mesh (largest extent " +
-                      fmt(extent) + " m, " + std::to_string(samples.size()) +
-                      " surface particles): use a sampling_spacing_m of at most " + fmt(extent / 3) + " m");
+                      fmt(extent) + " m): the body would be fewer than 3 particles across; use a sampling_spacing_m of at most " +
+                      fmt(extent / 3) + " m");
+    if (samples.size() < 8)
+      fail(scene, "bodies." + cb.name + ": particle spacing " + fmt(spacing) + " m leaves only " +
+                      std::to_string(samples.size()) + " surface particles on the mesh (at least 8 are needed); use a " +
+                      "smaller sampling_spacing_m, e.g. " + fmt(spacing / 2) + " m");
     const Quat q = from_config(cb.pose.orientation);
     const Vec3 origin = from_config(cb.pose.position_m);
     const Mat3 r = rotation_matrix(q);

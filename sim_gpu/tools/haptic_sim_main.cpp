@@ -3,13 +3,13 @@
 //   haptic-sim --scene FILE --backend cpu --duration SECONDS --out DIR [--threads N] [--export-every SECONDS]
 #include <unistd.h>
 
-#include <cmath>
-#include <cstdlib>
 #include <iostream>
 #include <string>
 
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/sim/batch_run.hpp"
+#include "hapfluid/sim/command_line_numbers.hpp"
+#include "hapfluid/sim/thread_pool.hpp"
 #ifdef HAPFLUID_WITH_VULKAN
 #include "hapfluid/sim_vulkan/backend.hpp"
 #endif
@@ -34,23 +34,14 @@ void usage(std::ostream& out) {
       ;
 }
 
-bool parse_number(const std::string& flag, const char* text, double& out) {
-  char* end = nullptr;
-  out = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !std::isfinite(out)) {
-    std::cerr << "haptic-sim: " << flag << " " << text << ": not a number\n";
-    return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (hapfluid::sim::wants_live(argc, argv)) return hapfluid::sim::live_main(argc, argv);
-  hapfluid::sim::BatchOptions o;
+  namespace sim = hapfluid::sim;
+  if (sim::wants_live(argc, argv)) return sim::live_main(argc, argv);
+  sim::BatchOptions o;
 #ifdef HAPFLUID_WITH_VULKAN
-  hapfluid::sim::vulkan::VulkanRunOptions vulkan;
+  sim::vulkan::VulkanRunOptions vulkan;
 #endif
   o.threads = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   for (int i = 1; i < argc; ++i) {
@@ -71,28 +62,24 @@ int main(int argc, char** argv) {
       return 2;
     }
     const char* v = argv[++i];
-    double number = 0;
     if (a == "--scene") o.scene = v;
     else if (a == "--out") o.out = v;
     else if (a == "--backend") o.backend = v;
 #ifdef HAPFLUID_WITH_VULKAN
     else if (a == "--vk-device") {
       try {
-        vulkan.device = hapfluid::sim::vulkan::parse_device_preference(v);
+        vulkan.device = sim::vulkan::parse_device_preference(v);
       } catch (const std::exception& e) {
         return std::cerr << "haptic-sim: --vk-device: " << e.what() << "\n", 2;
       }
     }
 #endif
     else if (a == "--duration") {
-      if (!parse_number(a, v, o.duration_s)) return 2;
-      if (o.duration_s <= 0) return std::cerr << "haptic-sim: --duration " << v << ": must be > 0\n", 2;
+      if (!sim::accepted(std::cerr, a, v, sim::parse_seconds(v, 0, true, o.duration_s))) return 2;
     } else if (a == "--threads") {
-      if (!parse_number(a, v, number)) return 2;
-      o.threads = static_cast<int>(number);
+      if (!sim::accepted(std::cerr, a, v, sim::parse_whole_number(v, 1, sim::kMaxWorkerThreads, o.threads))) return 2;
     } else if (a == "--export-every") {
-      if (!parse_number(a, v, o.export_every_s)) return 2;
-      if (o.export_every_s < 0) return std::cerr << "haptic-sim: --export-every " << v << ": must be >= 0\n", 2;
+      if (!sim::accepted(std::cerr, a, v, sim::parse_seconds(v, 0, false, o.export_every_s))) return 2;
     } else {
       std::cerr << "haptic-sim: unknown option " << a << "\n";
       usage(std::cerr);
@@ -107,9 +94,9 @@ int main(int argc, char** argv) {
   o.progress_line = isatty(STDERR_FILENO);
   try {
 #ifdef HAPFLUID_WITH_VULKAN
-    const auto r = hapfluid::sim::vulkan::run_batch_on_backend(o, vulkan, std::cerr);
+    const auto r = sim::vulkan::run_batch_on_backend(o, vulkan, std::cerr);
 #else
-    const auto r = hapfluid::sim::run_batch(o, std::cerr);
+    const auto r = sim::run_batch(o, std::cerr);
 #endif
     std::cerr << "haptic-sim: done: " << r.steps << " steps, " << r.simulated_time_s << " s simulated in " << r.wall_time_s
               << " s; outputs in " << o.out.string() << "\n";

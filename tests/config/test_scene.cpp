@@ -122,6 +122,38 @@ TEST(Scene, CouplingToAMissingDeviceOrBody) {
                  "couplings[0].body = \"ladle\": coupling to a missing body \"ladle\"");
 }
 
+TEST(Scene, OneDeviceHoldsOneBody) {
+  // Several devices may hold one body (the bimanual bucket), but one device renders the reaction
+  // of one coupling: a device coupled to a second body is refused, naming the first.
+  const std::string ladle = R"(
+[[bodies]]
+name = "ladle"
+mesh = "../meshes/spoon.obj"
+position_m = [0.1, 0.15, 0.06]
+density_kg_m3 = 700.0
+sampling_spacing_m = 0.01
+)";
+  const std::string two_bodies = kBase + kSpoon + ladle + kHand +
+                                 "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n"
+                                 "[[couplings]]\ndevice = \"hand\"\nbody = \"ladle\"\n";
+  expect_problem(two_bodies, "test.toml:35: couplings[1].device = \"hand\": already holds body \"spoon\" (couplings[0]): "
+                             "a device holds one body; give \"ladle\" its own [[devices]] entry, or couple it to a "
+                             "device that holds nothing");
+  expect_problem(kBase + kSpoon + kHand + "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n"
+                                           "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n",
+                 "couplings[1].device = \"hand\": already holds body \"spoon\" (couplings[0]): one coupling per device "
+                 "and body; remove one of the two");
+  // Two devices on one body, and each device on its own body, are fine.
+  EXPECT_EQ(problems_of(kBase + kSpoon + ladle + kHand + "[[devices]]\nname = \"other\"\nstart_position_m = [0.1, 0.1, 0.3]\n"
+                        "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n"
+                        "[[couplings]]\ndevice = \"other\"\nbody = \"spoon\"\n"),
+            "");
+  EXPECT_EQ(problems_of(kBase + kSpoon + ladle + kHand + "[[devices]]\nname = \"other\"\nstart_position_m = [0.1, 0.1, 0.3]\n"
+                        "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n"
+                        "[[couplings]]\ndevice = \"other\"\nbody = \"ladle\"\n"),
+            "");
+}
+
 TEST(Scene, CouplingToAStaticBody) {
   std::string text = kBase + kSpoon + "dynamic = false\n" + kHand + "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n";
   expect_problem(text, "coupling to the static body \"spoon\"");

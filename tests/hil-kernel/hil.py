@@ -89,7 +89,18 @@ def write_plan(results: pathlib.Path, tests, build: pathlib.Path, flavour: str) 
         f.write(f"HIL_SRC={SOURCE_DIR}\nHIL_BUILD={build}\nHIL_FLAVOUR={flavour}\n")
 
 
-def boot(kernel: pathlib.Path, initrd: pathlib.Path, results: pathlib.Path,
+def checkout_shares(build: pathlib.Path) -> list[str]:
+    """The checkout (and a build folder outside it) as 9p shares of their own: the guest mounts
+    fresh tmpfs on /tmp, /run, /var/tmp and /dev/shm, which would hide a clone that lives there
+    (guest/init mounts these shares over the host root's view of the same paths)."""
+    shares = ["-virtfs", f"local,path={SOURCE_DIR},mount_tag=hilsrc,security_model=none,readonly=on,multidevs=remap"]
+    if SOURCE_DIR not in build.resolve().parents:
+        shares += ["-virtfs", f"local,path={build.resolve()},mount_tag=hilbuild,security_model=none,readonly=on,"
+                   "multidevs=remap"]
+    return shares
+
+
+def boot(kernel: pathlib.Path, initrd: pathlib.Path, results: pathlib.Path, build: pathlib.Path,
          hard_timeout_s: float, verbose: bool) -> tuple[int | None, list[str]]:
     """Boots the guest, streams its console as progress, kills it past the hard limit.
 
@@ -101,6 +112,7 @@ def boot(kernel: pathlib.Path, initrd: pathlib.Path, results: pathlib.Path,
         "-append", "console=ttyS0 quiet panic=-1 loglevel=3",
         "-virtfs", "local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap",
         "-virtfs", f"local,path={results},mount_tag=results,security_model=none",
+        *checkout_shares(build),
     ]
     console_path = results / "console.log"
     lines: list[str] = []
@@ -175,7 +187,7 @@ def main() -> int:
     hard = args.timeout or HARD_LIMIT_S
     log(f"booting {kern.package} ({kern.version}) under QEMU/TCG: {len(tests)} guest tests, "
         f"hard limit {hard:.0f} s")
-    status, lines = boot(kern.vmlinux, initrd, results, hard, args.verbose)
+    status, lines = boot(kern.vmlinux, initrd, results, build, hard, args.verbose)
 
     report = read_results(results, [name for name, _, _ in tests])
     wall = time.monotonic() - wall0

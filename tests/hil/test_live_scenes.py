@@ -75,7 +75,9 @@ def test_a_clean_stop_leaves_no_shared_memory_or_sockets(stirring):
 def test_two_devices_on_one_bucket_share_its_weight(binary, tmp_path):
     # §6.4.4, fig. 11: both hands hold the bucket level for the first second; each carries a
     # share of the bucket's and the water's weight (neither holds it alone, neither pushes it up).
-    stack = Stack(binary, tmp_path, rig="fake_dual.toml", tag="bucket", lead_in_s=3.0,
+    # A 5 s lead-in: the level stretch starts once the sim (started after the devices and the loop,
+    # real-time factor ~0.6 here, lower on a loaded machine) reaches 1 s of simulated time.
+    stack = Stack(binary, tmp_path, rig="fake_dual.toml", tag="bucket", lead_in_s=5.0,
                   scene="bucket_bimanual")
     scene = SCENES / "bucket_bimanual.toml"
     try:
@@ -83,7 +85,7 @@ def test_two_devices_on_one_bucket_share_its_weight(binary, tmp_path):
         stack.fake_device("right", motion=f"scene:{scene}:right")
         stack.rt()
         stack.sim("bucket_bimanual", extra=("--threads", "2"))
-        time.sleep(3.5)
+        time.sleep(5.5)
         codes = {n: stack.stop(n) for n in ("rt", "sim", "fake-left", "fake-right")}
     finally:
         stack.close()

@@ -110,6 +110,16 @@ TEST(DamBreak, SurgeFrontAndResidualColumnFollowMartinMoyce1952) {
   EXPECT_GE(columns, 10);
   std::cout << "dam break: worst relative front error " << worst_front * 100 << " %, residual column "
             << worst_column * 100 << " %\n";
+  // Unlike the hydrostatic and momentum scenes, the last-resort wall clamp does act here, so it
+  // is not asserted to stay at 0; it is reported. Measured 737 events by t = 0.25 s on the CPU,
+  // from t = 0.09 s on, at the back wall, both slab walls and the floor: velocity noise (the
+  // out-of-plane rms speed, zero in the experiment, grows from 5 mm/s at t = 0.01 s to 0.24 m/s
+  // at 0.1 s and 0.7 m/s at 0.14 s) throws particles at up to 5 m/s, 2.5 times the flow's
+  // sqrt(2 g 2a), into the walls' first layer. Not the wall thickness (4 layers: 451 events),
+  // the slab's thinness (twice as wide: 583) or the stiffness (c = 30 m/s: 5122); 1 Pa s of
+  // viscosity keeps the noise at 5 cm/s and the clamp idle, but holds the front more than 5%
+  // behind Martin & Moyce from t = 0.12 s.
+  std::cout << "dam break: wall clamp events " << solver.clamped_particle_count() << "\n";
   EXPECT_EQ(solver.model().fluid.size(), count);      // mass conserved exactly
   for (float x : solver.model().fluid.x) ASSERT_LT(x, 0.6f);  // held by the far wall
 }

@@ -72,6 +72,14 @@ density_kg_m3 = 700.0
 cfl = 0.2
 )";
 
+// Simulated time of each determinism run (0.1 s: ~400 steps). The ThreadSanitizer build of
+// this test (test_sim_determinism_tsan), ~20 times slower, runs 0.02 s: every pass and every
+// hand-off of the thread pool still runs hundreds of times, which is what a race needs.
+#ifndef HAPFLUID_DETERMINISM_RUN_S
+#define HAPFLUID_DETERMINISM_RUN_S 0.1
+#endif
+constexpr double kRunSeconds = HAPFLUID_DETERMINISM_RUN_S;
+
 std::vector<float> snapshot(const CpuSolver& s) {
   const auto& f = s.model().fluid;
   std::vector<float> out;
@@ -90,14 +98,14 @@ TEST(Determinism, SameSceneTwiceWithTwoThreadsIsBitForBitEqual) {
   std::vector<float> runs[2];
   for (auto& out : runs) {
     CpuSolver solver(build_model(scene), 2);
-    test::run_for(solver, 0.1);
+    test::run_for(solver, kRunSeconds);
     out = snapshot(solver);
   }
   ASSERT_EQ(runs[0].size(), runs[1].size());
   EXPECT_EQ(std::memcmp(runs[0].data(), runs[1].data(), runs[0].size() * sizeof(float)), 0);
   // One thread computes the same sums in the same order per particle: identical too.
   CpuSolver single(build_model(scene), 1);
-  test::run_for(single, 0.1);
+  test::run_for(single, kRunSeconds);
   const auto one = snapshot(single);
   EXPECT_EQ(std::memcmp(runs[0].data(), one.data(), one.size() * sizeof(float)), 0);
   std::filesystem::remove_all(dir);

@@ -7,6 +7,8 @@ import subprocess
 import sys
 import pathlib
 
+import pytest
+
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 from vtk_reader import read_vtk  # noqa: E402
 
@@ -138,7 +140,124 @@ def test_bad_scene_fails_clearly_without_complete_outputs(binary, tmp_path):
     assert not (out / "bodies.csv").exists()
 
 
+def snapshot(folder: pathlib.Path) -> dict:
+    """Every file under folder, by relative path, with its bytes."""
+    return {str(f.relative_to(folder)): f.read_bytes() for f in sorted(folder.rglob("*")) if f.is_file()}
+
+
+def complete_run(binary, tmp_path, *extra) -> pathlib.Path:
+    out = tmp_path / "out"
+    result = run(binary, write_scene(tmp_path / "scene"), out, *extra)
+    assert result.returncode == 0, result.stderr
+    assert json.loads((out / "stats.json").read_text())["complete"] is True
+    return out
+
+
+BAD_SCENES = {
+    # load_scene refuses it (config error: file, line, key, value, reason)
+    "load": (("particle_spacing_m = 0.01", "particle_spacing_m = -0.01"),
+             "fluid.particle_spacing_m = -0.01: must be > 0"),
+    # load_scene accepts it, build_model refuses it
+    "build": (("position_m = [0.06, 0.03, 0.03]", "position_m = [0.0005, 0.03, 0.03]"),
+              "bodies.paddle: the body overlaps the domain wall x_min"),
+}
+
+
+@pytest.mark.parametrize("stage", sorted(BAD_SCENES))
+def test_rerun_with_a_bad_scene_leaves_the_previous_complete_run_untouched(binary, tmp_path, stage):
+    # A typo in the scene must not cost the user the run already in the folder: the new run
+    # fails before it touches DIR, and what is there is still the previous run, complete.
+    out = complete_run(binary, tmp_path, "--export-every", "0.05")
+    before = snapshot(out)
+    assert "particles/frame_000002.vtk" in before and "bodies.csv" in before
+    (old, new), message = BAD_SCENES[stage]
+    bad = write_scene(tmp_path / "bad", SCENE.replace(old, new))
+    result = run(binary, bad, out)
+    assert result.returncode == 1
+    assert message in result.stderr
+    assert str(bad) in result.stderr  # the file to fix
+    assert snapshot(out) == before
+    assert json.loads((out / "stats.json").read_text())["complete"] is True
+
+
+def test_rerun_that_diverges_midway_leaves_nothing_that_looks_complete(binary, source_dir, tmp_path):
+    # The drop diverges on reaching the floor at t = 0.12 s (scenes/diverging_drop.toml), after
+    # it has written frames: the previous run's outputs are gone, stats.json says the run did not
+    # complete and why, the CSVs are .part only, and every frame is the new run's.
+    out = complete_run(binary, tmp_path, "--export-every", "0.01")
+    assert len(list((out / "particles").glob("*.vtk"))) == 11
+    scene = source_dir / "tests/sim_gpu/scenes/diverging_drop.toml"
+    result = run(binary, scene, out, "--export-every", "0.05")
+    assert result.returncode == 1, result.stderr
+    assert "haptic-sim: error: simulation diverged at t = 0.12 s: fluid particle " in result.stderr
+    assert "is not finite: lower time.dt_s (0.001 s; 0 chooses a stable CFL step), or the stiffness" in result.stderr
+    stats = json.loads((out / "stats.json").read_text())
+    assert stats["complete"] is False
+    assert stats["error"].startswith("simulation diverged at t = 0.12 s: fluid particle ")
+    assert stats["scene"] == str(scene) and stats["particles"]["fluid"] == 8
+    assert stats["steps"] == 110  # 11 frames of 10 steps passed the check; the 12th did not
+    assert not (out / "bodies.csv").exists() and not (out / "couplings.csv").exists()
+    assert (out / "bodies.csv.part").exists() and (out / "couplings.csv.part").exists()
+    frames = sorted((out / "particles").glob("*.vtk"))
+    assert [f.name for f in frames] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
+    assert stats["frames_exported"] == 3
+    for f in frames:
+        assert read_vtk(f)["points"].shape[0] == stats["particles"]["total"], f.name
+
+
+def test_rerun_that_succeeds_keeps_no_frame_of_the_previous_run(binary, tmp_path):
+    # The previous run exported more frames than this one: none of them may remain.
+    out = complete_run(binary, tmp_path, "--export-every", "0.01")
+    assert len(list((out / "particles").glob("*.vtk"))) == 11
+    result = run(binary, write_scene(tmp_path / "scene"), out, "--export-every", "0.05")
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((out / "stats.json").read_text())
+    assert stats["complete"] is True and stats["frames_exported"] == 3
+    assert [f.name for f in sorted((out / "particles").iterdir())] == \
+        ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
+    assert not list(out.rglob("*.part"))
+
+
 def test_missing_arguments_print_usage(binary):
     result = subprocess.run([str(binary("haptic-sim"))], capture_output=True, text=True)
     assert result.returncode == 2
     assert "--scene and --out are required" in result.stderr
+
+
+@pytest.mark.parametrize("option, value, reason", [
+    # Integer options take whole numbers only: 2.5 threads was silently run as 2.
+    ("--threads", "2.5", "must be a whole number in 1..256"),
+    ("--threads", "2threads", "not a number (must be a whole number in 1..256)"),
+    ("--threads", " 2", "not a number (must be a whole number in 1..256)"),
+    ("--threads", "-1", "must be a whole number in 1..256"),
+    ("--threads", "0", "must be a whole number in 1..256"),
+    ("--threads", "1e2", "must be a whole number in 1..256"),
+    ("--threads", "99999999999", "must be a whole number in 1..256"),
+    # Durations are finite seconds.
+    ("--duration", "inf", "must be a finite number of seconds > 0"),
+    ("--duration", "nan", "must be a finite number of seconds > 0"),
+    ("--duration", "-0.1", "must be > 0 s"),
+    ("--duration", "0", "must be > 0 s"),
+    ("--duration", "1s", "not a number (must be a number of seconds > 0)"),
+    ("--export-every", "-0.01", "must be >= 0 s"),
+    ("--export-every", "inf", "must be a finite number of seconds >= 0"),
+])
+def test_numeric_options_are_strict_and_name_option_and_value(binary, tmp_path, option, value, reason):
+    scene = write_scene(tmp_path / "scene")
+    result = run(binary, scene, tmp_path / "out", option, value)
+    assert result.returncode == 2
+    assert f"haptic-sim: {option} {value}: {reason}\n" in result.stderr
+    assert not (tmp_path / "out").exists()  # refused before anything ran
+
+
+@pytest.mark.parametrize("option, value, reason", [
+    ("--threads", "1.5", "must be a whole number in 1..256"),
+    ("--duration", "inf", "must be a finite number of seconds >= 0"),
+    ("--max-lag", "0", "must be >= 0.001 s"),
+    ("--status-every", "-1", "must be >= 0 s"),
+])
+def test_live_numeric_options_are_strict_too(binary, tmp_path, option, value, reason):
+    result = subprocess.run([str(binary("haptic-sim")), "--live", "--scene", str(write_scene(tmp_path / "scene")),
+                             option, value], capture_output=True, text=True, timeout=30)
+    assert result.returncode == 2
+    assert f"haptic-sim: {option} {value}: {reason}\n" in result.stderr

@@ -99,9 +99,17 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   // Time-averaged profile over the last 0.3 s (10 snapshots): the settled column still jitters.
   const int snapshots = 10;
   Profile mean;
+  double worst_snapshot_band = 0;
   for (int k = 0; k < snapshots; ++k) {
     test::run_for(solver, 0.03, 0.03);
     const Profile now = pressure_profile(solver, scene);
+    // Issue 3's 10% holds for every settled snapshot, not only on average (worst band of the 10
+    // snapshots measured 5.1% on the CPU, 4.7% on Vulkan; time-averaged 4.2% and 3.5%).
+    for (std::size_t b = 0; b < now.depth_m.size(); ++b) {
+      const double expected = scene.fluid.rest_density_kg_m3 * 9.81 * now.depth_m[b];  // Pa
+      EXPECT_NEAR(now.pressure_pa[b], expected, 0.10 * expected) << "snapshot " << k << ", depth " << now.depth_m[b] << " m";
+      worst_snapshot_band = std::max(worst_snapshot_band, std::abs(now.pressure_pa[b] / expected - 1));
+    }
     if (mean.depth_m.empty()) mean.depth_m.assign(now.depth_m.size(), 0), mean.pressure_pa.assign(now.depth_m.size(), 0);
     for (std::size_t b = 0; b < now.depth_m.size(); ++b) {
       mean.depth_m[b] += now.depth_m[b] / snapshots;
@@ -155,7 +163,8 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
     EXPECT_NEAR(mean.pressure_pa[b], expected, 0.10 * expected) << "depth " << mean.depth_m[b] << " m";
     worst = std::max(worst, std::abs(mean.pressure_pa[b] / expected - 1));
   }
-  std::cout << "hydrostatic: worst bulk band " << 100 * worst << " % from rho0 g d\n";
+  std::cout << "hydrostatic: worst bulk band " << 100 * worst << " % from rho0 g d (time-averaged), "
+            << 100 * worst_snapshot_band << " % in a single snapshot\n";
   // The hydrostatic law itself, dp/dd = rho0 g (least squares over the bands).
   double md = 0, mp = 0;
   for (std::size_t b = 0; b < bands; ++b) md += mean.depth_m[b] / bands, mp += mean.pressure_pa[b] / bands;

@@ -78,3 +78,18 @@ def test_coupled_body_run_keeps_the_validation_layer_silent(binary, source_dir, 
     assert stats["gpu_pass_ms_per_step"]["bodies"] > 0
     rows = (tmp_path / "couplings.csv").read_text().splitlines()
     assert rows[0] == "t,device,body,fx,fy,fz,tx,ty,tz" and len(rows) > 1
+
+
+def test_diverging_run_fails_naming_what_went_non_finite_without_complete_outputs(binary, source_dir, tmp_path):
+    # The cpu backend's diverging scene (tests/sim_gpu/scenes/diverging_drop.toml) on the device:
+    # the same check (check_finite_state), here once the run's particles are read back.
+    result = subprocess.run(
+        [str(binary("haptic-sim")), "--scene", "tests/sim_gpu/scenes/diverging_drop.toml", "--out", str(tmp_path),
+         "--backend", "vulkan", "--export-every", "0"],
+        cwd=source_dir, capture_output=True, text=True, timeout=120)
+    assert result.returncode == 1, result.stderr
+    assert "haptic-sim: error: simulation diverged at t = " in result.stderr
+    assert ": fluid particle " in result.stderr and "is not finite: lower time.dt_s" in result.stderr
+    stats = json.loads((tmp_path / "stats.json").read_text())
+    assert stats["complete"] is False and "is not finite" in stats["error"]
+    assert not (tmp_path / "bodies.csv").exists() and (tmp_path / "bodies.csv.part").exists()

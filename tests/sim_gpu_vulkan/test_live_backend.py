@@ -39,11 +39,19 @@ def no_driver_env():
 def test_auto_runs_vulkan_on_a_scene_it_keeps_up_with(binary, source_dir, tmp_path):
     # The default: the live fluid on Vulkan (lavapipe here). The light scene needs 250
     # steps/s; lavapipe makes ~700 on this 2-core machine, so the probe keeps Vulkan and the run
-    # follows the wall clock.
-    result = live(binary, source_dir, tmp_path, LIGHT, "auto", duration_s=2.0)
-    assert result.returncode == 0, result.stderr
-    stats = json.loads((tmp_path / "stats.json").read_text())
-    assert stats["complete"] and stats["backend"] == "vulkan"
+    # follows the wall clock. A machine loaded by something else can slow the probe below the bar:
+    # then auto must have followed its rule (cpu, said loudly), and the run is tried again.
+    for attempt in range(3):
+        out = tmp_path / f"attempt{attempt}"
+        result = live(binary, source_dir, out, LIGHT, "auto", duration_s=2.0)
+        assert result.returncode == 0, result.stderr
+        stats = json.loads((out / "stats.json").read_text())
+        probes = stats["backend_choice"]
+        if probes["vulkan_probe"]["real_time_factor"] >= MIN_VULKAN_RTF:
+            break
+        faster = "cpu" if probes["cpu_probe"]["real_time_factor"] > probes["vulkan_probe"]["real_time_factor"] else "vulkan"
+        assert stats["backend"] == faster and "cannot keep up" in start_line(result.stderr), result.stderr
+    assert stats["complete"] and stats["backend"] == "vulkan", stats["backend_choice"]
     assert stats["device"]["name"] and stats["device"]["driver"], stats["device"]
     choice = stats["backend_choice"]
     assert choice["requested"] == "auto" and choice["cpu_probe"] is None

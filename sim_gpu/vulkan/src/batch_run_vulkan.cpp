@@ -73,8 +73,8 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
   progress << "haptic-sim: Vulkan device: " << solver.device().name << " (" << solver.device().type << ", "
            << solver.device().driver << ")\n";
 
-  std::filesystem::create_directories(o.out);
-  std::filesystem::remove(o.out / "stats.json");
+  std::filesystem::create_directories(o.out / "particles");
+  remove_previous_outputs(o.out);  // only now: a scene or device that fails leaves a previous run as it was
   VtkFrameSeries vtk_frames(o.out / "particles", o.export_every_s);
   CsvFile bodies_csv(o.out / "bodies.csv", kBodiesCsvHeader);
   CsvFile couplings_csv(o.out / "couplings.csv", kCouplingsCsvHeader);
@@ -133,6 +133,8 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
       }
     }
     solver.check_finite();
+    bodies_csv.finish();
+    couplings_csv.finish();
   } catch (const std::exception& e) {
     error = e.what();
   }
@@ -141,8 +143,6 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
     write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, false, error));
     throw std::runtime_error(error);
   }
-  bodies_csv.finish();
-  couplings_csv.finish();
   write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, true, ""));
   return r;
 }

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "../shaders/bindings.glsl"
+#include "hapfluid/sim/finite_state.hpp"
 #include "hapfluid/sim/gradient_correction.hpp"
 
 namespace hapfluid::sim::vulkan {
@@ -557,13 +558,7 @@ void VulkanSolver::sync_particles() {
 
 void VulkanSolver::check_finite() {
   sync_particles();
-  const FluidParticles& f = m_.fluid;
-  for (std::size_t i = 0; i < f.size(); ++i)
-    if (!std::isfinite(f.x[i]) || !std::isfinite(f.y[i]) || !std::isfinite(f.z[i]) || !std::isfinite(f.vx[i]) ||
-        !std::isfinite(f.vy[i]) || !std::isfinite(f.vz[i]))
-      throw std::runtime_error("simulation diverged at t = " + std::to_string(time_s_) + " s: fluid particle " +
-                               std::to_string(f.id[i]) +
-                               " has a non-finite position or velocity (lower time.cfl or time.max_dt_s, or the stiffness)");
+  check_finite_state(m_, time_s_);
 }
 
 }  // namespace hapfluid::sim::vulkan

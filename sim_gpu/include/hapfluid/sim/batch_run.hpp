@@ -26,7 +26,10 @@ struct BatchResult {
 };
 
 // Throws std::runtime_error (or config::ConfigError) with a message naming what was wrong.
-// On failure stats.json says "complete": false with the error, and CSV files stay as .part.
+// A scene that fails to load or build throws before the output folder is touched (a previous
+// run there stays complete). Then the previous run's outputs are removed (stats.json first);
+// a failure from there on leaves stats.json with "complete": false and the error, and the CSV
+// files as .part.
 BatchResult run_batch(const BatchOptions& options, std::ostream& progress);
 
 }  // namespace hapfluid::sim

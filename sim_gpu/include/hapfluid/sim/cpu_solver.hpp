@@ -55,7 +55,8 @@ class CpuSolver {
   // substep's start time (the caller sets device states there); otherwise they are held.
   int advance(double duration_s, const std::function<void(double)>& before_substep = {});
 
-  // Throws std::runtime_error naming the first particle or body whose state is not finite.
+  // Throws std::runtime_error naming the first particle or body whose state is not finite
+  // (check_finite_state).
   void check_finite() const;
 
  private:

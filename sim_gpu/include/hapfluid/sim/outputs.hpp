@@ -16,8 +16,8 @@ namespace hapfluid::sim {
 void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& model, double time_s);
 
 // A run's particle frames: DIR/frame_NNNNNN.vtk every `interval_s` of simulated time (haptic-sim
-// --export-every, batch and live alike; 0: none). The constructor creates DIR and removes the
-// frames of an earlier run there, so a folder never mixes two runs.
+// --export-every, batch and live alike; 0: none). The constructor creates DIR; an earlier run's
+// frames there are remove_previous_outputs' to remove, before.
 class VtkFrameSeries {
  public:
   VtkFrameSeries(std::filesystem::path dir, double interval_s);
@@ -59,6 +59,12 @@ std::string coupling_row(const SimulationModel& model, const VirtualCoupling& co
 
 // Writes text to file atomically (temporary name, then rename).
 void write_text_atomically(const std::filesystem::path& file, const std::string& text);
+
+// Removes what a previous run left in the output folder `dir`, stats.json first (from then on
+// nothing there claims a complete run), then bodies.csv, couplings.csv (and their .part) and
+// the frames in particles/ (*.vtk, *.part). A run calls it once its scene has loaded and built,
+// just before it writes: a scene that fails leaves the previous run's outputs untouched.
+void remove_previous_outputs(const std::filesystem::path& dir);
 
 std::string json_escape(const std::string& text);
 

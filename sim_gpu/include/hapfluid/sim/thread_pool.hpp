@@ -13,6 +13,9 @@
 
 namespace hapfluid::sim {
 
+// The most worker threads haptic-sim runs (--threads, batch and live).
+inline constexpr int kMaxWorkerThreads = 256;
+
 class ThreadPool {
  public:
   // threads >= 1; the calling thread is worker 0, so threads - 1 helpers are started.

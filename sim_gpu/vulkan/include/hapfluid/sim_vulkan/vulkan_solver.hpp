@@ -86,7 +86,8 @@ class VulkanSolver {
   // Downloads fluid particles (position, velocity, acceleration, density, pressure, volume,
   // viscosity, id) into model(), in the device's current (cell-sorted) order.
   void sync_particles();
-  // Throws std::runtime_error naming the first non-finite particle (syncs first).
+  // Throws std::runtime_error naming the first non-finite particle or body (syncs first;
+  // check_finite_state).
   void check_finite();
 
   // Per-pass GPU times and the same split as the CPU backend's PhaseTimes (sort is the
