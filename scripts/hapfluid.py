@@ -2,7 +2,8 @@
 """hapfluid launcher: runs a scene on the live stack, every part a separate process.
 
     hapfluid.py run [--scene NAME|FILE] [--rig FILE] [--duration S] [--build DIR] [--out DIR]
-                    [--windowed] [--no-render] [--shm-prefix P] [--batch]
+                    [--windowed] [--no-render] [--shm-prefix P] [--batch] [--export-every S]
+                    [--no-cyclictest] [--cyclictest-cpu N]
 
 A live run starts, in this order:
   haptic-fake-device       one per rig device, playing the scene's scripted hand (--motion scene:...)
@@ -11,13 +12,19 @@ A live run starts, in this order:
   haptic-trace             drains the loop's trace ring to trace.csv
   haptic-sim --live        the fluid, simulated time following the wall clock; its wrench fades in
   haptic-render --live     headless PNG frames (or a window with --windowed)
-runs for --duration seconds (default 10), stops them in reverse dependency order (render, loop,
-trace, sim, devices), checks every exit code and leaves under out/<scene>-<timestamp>/:
+and cyclictest (rt-tests) at the loop's priority and period beside them (cyclictest_placement); runs for
+--duration seconds (default: the 3 s lead-in plus the scene's duration_s, 13 s for the default
+scene), stops them in reverse dependency order (render, loop, trace, sim, devices), checks every
+exit code and leaves under out/<scene>-<timestamp>/:
   device_<name>.csv        what the fake device felt (its per-tick log)
   sim/couplings.csv        the coupling wrench the sim computed (on the hand), sim/bodies.csv, sim/stats.json
-  wrenches.png             fig. 8b-style force/torque plot (both histories)
+  sim/particles/frame_*.vtk  particle frames every --export-every s of simulated time (ParaView)
+  wrenches.png             fig. 8b-style plot: the scene's force and torque components (plot_wrenches.py
+                           SCENE_COMPONENTS, e.g. the stroke axis for stirring) of both histories against
+                           the hand's clock, the script's motions shaded
   frames/frame_*.png       rendered frames
-  trace.csv, latency.png, latency.json   the 1 kHz loop's trace and latency report
+  trace.csv, latency.txt, latency.png, latency.json, cyclictest.txt
+                           the 1 kHz loop's wake latency next to cyclictest's from the same window
   summary.json             the printed summary
 The rig is copied with private loopback socket paths and a private shm prefix, so runs never
 collide with each other or with installed services. --batch runs the batch simulator instead.
@@ -36,9 +43,12 @@ import sys
 import tomllib
 import time
 
+import latency_report  # scripts/: cyclictest beside the loop, shared with latency_report.py --with-cyclictest
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SCENES = ROOT / "config" / "scenes"
 RIGS = ROOT / "config" / "rigs"
+SETTLE_S = 0.5  # the sim's time before the script starts below which its fluid has not settled
 
 
 def resolve_scene(name: str) -> pathlib.Path:
@@ -248,6 +258,23 @@ class Stack:
         return codes
 
 
+# cyclictest beside the live stack (summary: "1 kHz loop wake latency ... vs cyclictest ... in the
+# same window"): one thread at the loop's SCHED_FIFO priority and period (the rig's [rt]) on the
+# loop's own CPU (rt.cpu), so both see the same CPU's interrupts, ticks and neighbours: what the
+# kernel gives a FIFO thread there against what the loop gets. It does not disturb the loop
+# measurably (spoon_stirring, 10 s runs, this 2-core VM loaded by other sessions; loop
+# p50/p99/p99.9 µs): without cyclictest 26.9/88/297, 38.5/92/144, 32.5/83/491, 26.0/68/4799; with
+# it on CPU 1 26.0/82/321, 26.7/72/1370 (cyclictest there 29/112/326, 27/74/1360: it tracks the
+# loop); on CPU 0 instead 34.9/100/268, 47.9/92/351, 27.4/65/1056, 40.0/82/740, where cyclictest
+# measures the sim's CPU (p99.9 88 vs the loop's 351), not the loop's. The residual risk: both
+# sleep on absolute 1 ms grids and cyclictest's phase is random, so in the few runs in a hundred
+# where it lands within the loop's ~20 µs of work each tick one delays the other (cyclictest's own
+# work is ~2 µs); --cyclictest-cpu moves it.
+def cyclictest_placement(rt: dict) -> int:
+    """The CPU cyclictest runs on beside a loop with the rig's rt settings (-1: any)."""
+    return rt["cpu"]
+
+
 def read_device_log(path: pathlib.Path):
     """Rows of the fake device's --log CSV as floats."""
     with path.open(newline="") as f:
@@ -265,16 +292,18 @@ def sim_start_monotonic_s(couplings: pathlib.Path):
 
 
 def device_wrench_csv(logs: dict, out: pathlib.Path, shift_s: dict | None = None) -> pathlib.Path:
-    """The fake devices' logs as one t,device,fx..tz CSV (force applied on the hand), for plotting.
-    shift_s[name] moves a device's own clock onto the sim's (its start minus the sim's start)."""
+    """The fake devices' logs as one t,wall_s,device,fx..tz CSV (force applied on the hand), for plotting.
+    shift_s[name] moves a device's own clock onto the sim's wall clock (its start minus the sim's
+    start), the wall_s axis of sim/couplings.csv; t is the same (a device has no simulated time)."""
     shift_s = shift_s or {}
     path = out / "device_wrenches.csv"
     with path.open("w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["t", "device", "fx", "fy", "fz", "tx", "ty", "tz"])
+        w.writerow(["t", "wall_s", "device", "fx", "fy", "fz", "tx", "ty", "tz"])
         for name, rows in logs.items():
             for r in rows[::5]:  # 200 Hz is plenty for a plot
-                w.writerow([f"{r['t_s'] + shift_s.get(name, 0.0):.6f}", name, r["applied_fx"], r["applied_fy"], r["applied_fz"],
+                wall = f"{r['t_s'] + shift_s.get(name, 0.0):.6f}"
+                w.writerow([wall, wall, name, r["applied_fx"], r["applied_fy"], r["applied_fz"],
                             r["applied_tx"], r["applied_ty"], r["applied_tz"]])
     return path
 
@@ -286,7 +315,8 @@ def run_live(args, scene_path, out, bin_dir):
     rig_path, offsets = private_rig(rig_src, out, tag, scene)
     rig = load_toml(rig_path)
     prefix = args.shm_prefix or f"hapfluid-run-{tag}"
-    duration = args.duration if args.duration else float(scene.get("duration_s", 10.0))
+    # The scene's whole script plays: its duration_s after the hands' lead-in.
+    duration = args.duration if args.duration else float(scene.get("duration_s", 10.0)) + args.lead_in
     (out / "logs").mkdir(exist_ok=True)
     (out / "frames").mkdir(exist_ok=True)
 
@@ -300,7 +330,7 @@ def run_live(args, scene_path, out, bin_dir):
     stack = Stack(out)
     print(f"hapfluid: live run of {scene_path.stem} for {duration:g} s on rig {rig_src.name} "
           f"(shm prefix {prefix}); logs in {out / 'logs'}", flush=True)
-    ok = True
+    ok, cyclictest = True, None
     device_logs = {}
     device_scene_path = device_scene(scene_path, out, args.lead_in, offsets)
     started = time.monotonic()
@@ -324,11 +354,13 @@ def run_live(args, scene_path, out, bin_dir):
         if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.device_states"), 15, rt):
             raise RuntimeError("haptic-rt did not start (see logs/haptic-rt.log)")
         time.sleep(0.5)
+        cyclictest = start_cyclictest_beside(args, rig_path, out)
         stack.start("haptic-trace", [bin_dir / "haptic-trace", "--out", out / "trace.csv", "--shm-prefix", prefix,
                                      "--wait", "10"])
         sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
                                          "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
-                                         "--threads", str(args.sim_threads), "--backend", args.backend],
+                                         "--threads", str(args.sim_threads), "--backend", args.backend,
+                                         "--export-every", str(args.export_every)],
                           nice=-5)  # feeds the haptic loop: ahead of builds and the renderer
         if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
             raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
@@ -351,6 +383,7 @@ def run_live(args, scene_path, out, bin_dir):
     except RuntimeError as e:
         ok = False
         print(f"hapfluid: {e}", file=sys.stderr)
+    cyclictest_run = stop_cyclictest(cyclictest)
     codes = stack.stop_all(grace={"haptic-render": 8.0}, order=["haptic-render", "haptic-rt", "haptic-trace", "haptic-sim"] +
                            [n for n, _, _ in stack.procs if n.startswith("haptic-fake-device")])
     for name, code in codes.items():
@@ -362,10 +395,52 @@ def run_live(args, scene_path, out, bin_dir):
     if leftovers:
         ok = False
         print(f"hapfluid: shared memory left behind: {leftovers}", file=sys.stderr)
-    return ok, rig, device_logs, stack.started_at
+    return ok, rig, device_logs, stack.started_at, cyclictest_run
 
 
-def post_process(out, rig, device_logs, scene_name, started=None):
+def start_cyclictest_beside(args, rig_path: pathlib.Path, out: pathlib.Path):
+    """cyclictest at the loop's priority and period for the rest of the run (cyclictest_placement), or
+    None (--no-cyclictest, or rt-tests not installed: said in one line)."""
+    if args.no_cyclictest:
+        return None
+    rt = latency_report.read_rig_rt(rig_path)
+    cpu = args.cyclictest_cpu if args.cyclictest_cpu is not None else cyclictest_placement(rt)
+    stdout = open(out / "cyclictest.txt", "w")
+    stderr = open(out / "logs" / "cyclictest.log", "w")
+    proc = latency_report.start_cyclictest(rt, cpu=cpu, stdout=stdout, stderr=stderr)
+    if proc is None:
+        stdout.close(), stderr.close()
+        (out / "cyclictest.txt").unlink()
+        print("hapfluid: note: cyclictest not installed (apt install rt-tests): loop latency without it", file=sys.stderr)
+        return None
+    return {"proc": proc, "files": (stdout, stderr), "cpu": cpu, "loop_cpu": rt["cpu"], "priority": rt["priority"],
+            "period_us": rt["period_ns"] / 1e3}
+
+
+def stop_cyclictest(run):
+    """Ends cyclictest (SIGINT: it prints its histogram) and returns its window, or None if it failed
+    (its own problem, e.g. no right to SCHED_FIFO: said, never a failure of the run)."""
+    if run is None:
+        return None
+    proc = run.pop("proc")
+    run["stopped_s"] = time.monotonic()
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        code = proc.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        code = proc.wait()
+    for f in run.pop("files"):
+        f.close()
+    if code != 0:
+        print(f"hapfluid: note: cyclictest exited with {code} (see logs/cyclictest.log): loop latency without it",
+              file=sys.stderr)
+        return None
+    return run
+
+
+def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyclictest=None):
     started = started or {}
     py = sys.executable
     summary = {"scene": scene_name, "out": str(out)}
@@ -390,21 +465,50 @@ def post_process(out, rig, device_logs, scene_name, started=None):
         summary["max_force_on_hand_n"] = {
             n: round(max((math.hypot(r["applied_fx"], r["applied_fy"], r["applied_fz"]) for r in rows), default=0), 3)
             for n, rows in logs.items()}
+        # The scripted hands start their script lead_in after their own start: that instant on the
+        # sim's wall clock is the scene's time 0 (the plot's and run_scenarios.py's phase windows).
+        if shift:
+            summary["script_offset_s"] = round(lead_in_s + min(shift.values()), 4)
+            summary["lead_in_s"] = lead_in_s
+            if summary["script_offset_s"] < SETTLE_S:
+                summary["warning"] = (f"the scene's script started {summary['script_offset_s']:.2f} s after the sim's first "
+                                      f"step (< {SETTLE_S} s): its fluid had not settled; run with a longer --lead-in")
+        # Against the wall clock (as the hand moves), not simulated time: the two differ when the
+        # sim runs slower than real time and drops its backlog, and the device's curve has only the wall.
         plot = subprocess.run([py, str(ROOT / "scripts" / "plot_wrenches.py"), str(out / "sim" / "couplings.csv"),
                                str(dev_csv), "--out", str(out / "wrenches.png"), "--labels", "sim coupling,device (applied)",
+                               "--scene", scene_name, "--time", "wall", f"--time-offset={summary.get('script_offset_s', 0)}",
+                               *[f"--hand={p}" for p in device_logs.values()], f"--hand-offset={lead_in_s}",
                                "--title", f"{scene_name}: wrench on the hand"], capture_output=True, text=True)
         if plot.returncode != 0:
             print("hapfluid: plot_wrenches failed:\n" + plot.stderr, file=sys.stderr)
-    frames = sorted((out / "frames").glob("frame_*.png"))
-    summary["rendered_frames"] = len(frames)
+    summary["rendered_frames"] = len(sorted((out / "frames").glob("frame_*.png")))
+    summary["vtk_frames"] = len(sorted((out / "sim" / "particles").glob("frame_*.vtk")))
     if (out / "trace.csv").exists():
-        rep = subprocess.run([py, str(ROOT / "scripts" / "latency_report.py"), str(out / "trace.csv"),
-                              "--png", str(out / "latency.png"), "--json", str(out / "latency.json")],
-                             capture_output=True, text=True)
-        (out / "latency.txt").write_text(rep.stdout + rep.stderr)
+        report = [py, str(ROOT / "scripts" / "latency_report.py"), str(out / "trace.csv"),
+                  "--png", str(out / "latency.png"), "--json", str(out / "latency.json")]
+        if cyclictest:
+            # The loop's ticks of the window cyclictest ran in, nothing before or after it: it takes
+            # one sample per period (a late wake still counts one), so it began N periods before it stopped.
+            samples = latency_report.cyclictest_result((out / "cyclictest.txt").read_text())[0]["n"]
+            started_ns = cyclictest["stopped_s"] * 1e9 - samples * cyclictest["period_us"] * 1e3
+            report += ["--cyclictest-log", str(out / "cyclictest.txt"),
+                       "--window-ns", f"{started_ns:.0f}:{cyclictest['stopped_s'] * 1e9:.0f}"]
+        rep = subprocess.run(report, capture_output=True, text=True)
+        placement = ""
+        if cyclictest:
+            same = ("the loop's CPU" if cyclictest["cpu"] == cyclictest["loop_cpu"]
+                    else f"the loop is on CPU {cyclictest['loop_cpu']}")
+            placement = (f"cyclictest: CPU {cyclictest['cpu']} ({same}), SCHED_FIFO {cyclictest['priority']}, "
+                         f"every {cyclictest['period_us']:g} µs, same window as the loop's ticks above\n")
+        (out / "latency.txt").write_text(rep.stdout + placement + rep.stderr)
         if rep.returncode == 0 and (out / "latency.json").exists():
             lat = json.loads((out / "latency.json").read_text())
             summary["wake_latency_us"] = lat.get("wake_latency_us", lat)
+            summary["cyclictest_us"] = lat.get("cyclictest_us")
+            if cyclictest:
+                summary["cyclictest"] = {k: cyclictest[k] for k in ("cpu", "loop_cpu", "priority", "period_us")}
+                summary["cyclictest"]["window_s"] = lat.get("window_s")
         else:
             print("hapfluid: latency_report failed:\n" + rep.stderr, file=sys.stderr)
     return summary
@@ -417,12 +521,23 @@ def print_summary(summary):
         print(f"  sim: {summary['sim_backend']} backend on {summary['sim_device']} ({summary['sim_backend_reason']})")
         print(f"  sim: {summary['sim_steps_per_s']} steps/s, real-time factor {summary['real_time_factor']} "
               f"({kept}), {summary['fluid_particles']} fluid particles")
-    print(f"  rendered frames: {summary.get('rendered_frames', 0)}")
-    w = summary.get("wake_latency_us")
+    print(f"  rendered frames: {summary.get('rendered_frames', 0)}, VTK particle frames: {summary.get('vtk_frames', 0)}")
+    w, ct = summary.get("wake_latency_us"), summary.get("cyclictest_us")
+
+    def row(p):
+        return "  ".join(f"{k} {p[k]:7.1f}" for k in ("p50", "p99", "p99.9", "max"))
     if isinstance(w, dict) and "p99" in w:
-        print(f"  1 kHz loop wake latency: p50 {w.get('p50', 0):.1f} us, p99 {w['p99']:.1f} us, max {w.get('max', 0):.1f} us")
+        if ct:
+            c = summary["cyclictest"]
+            print(f"  1 kHz loop wake latency (µs) vs cyclictest in the same {c['window_s']:g} s window:")
+            print(f"    loop (CPU {c['loop_cpu']})         {row(w)}")
+            print(f"    cyclictest (CPU {c['cpu']})   {row(ct)}")
+        else:
+            print(f"  1 kHz loop wake latency (µs): {row(w)} (no cyclictest)")
     for n, f in summary.get("max_force_on_hand_n", {}).items():
         print(f"  max force on the hand '{n}': {f} N")
+    if "warning" in summary:
+        print(f"  WARNING: {summary['warning']}")
     print(f"  outputs: {summary['out']}")
 
 
@@ -432,16 +547,25 @@ def main():
     run = sub.add_parser("run", help="run a scene")
     run.add_argument("--scene", default="spoon_stirring")
     run.add_argument("--rig", default=None, help="rig file (default: fake_single, fake_dual for two-hand scenes)")
-    run.add_argument("--duration", type=float, default=None, help="seconds (default: the scene's duration_s)")
+    run.add_argument("--duration", type=float, default=None,
+                     help="wall seconds from the start (default: the lead-in plus the scene's duration_s)")
     run.add_argument("--build", default="build")
     run.add_argument("--out", default=None, help="output folder (default: out/<scene>-<timestamp>)")
     run.add_argument("--windowed", action="store_true", help="render in a window instead of PNG frames")
     run.add_argument("--no-render", action="store_true", help="run without the renderer")
     run.add_argument("--shm-prefix", default=None, help="shared-memory prefix (default: private to this run)")
-    run.add_argument("--lead-in", type=float, default=1.5,
+    # The stack takes 1.5-2.5 s to publish its first sample (auto's backend probe ~1 s, the loop's
+    # start, a loaded machine): at 1.5 s the stirring stroke began before the sim's first step.
+    run.add_argument("--lead-in", type=float, default=3.0,
                      help="seconds the fake hands hold still before their script starts (loop engages, fluid settles)")
     run.add_argument("--sim-threads", type=int, default=max(1, (os.cpu_count() or 2) - 1),
                      help="simulator threads (default: one core left for the loop and the devices)")
+    run.add_argument("--export-every", type=float, default=0.5,
+                     help="VTK particle frames (sim/particles/, ParaView) every S simulated seconds (0: none)")
+    run.add_argument("--no-cyclictest", action="store_true",
+                     help="do not run cyclictest beside the loop (its latency is then reported alone)")
+    run.add_argument("--cyclictest-cpu", type=int, default=None,
+                     help="CPU for cyclictest (default: the loop's rt.cpu; hapfluid.py cyclictest_placement)")
     run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")
     run.add_argument("--backend", choices=("auto", "vulkan", "cpu"), default="auto",
                      help="simulator backend (auto: Vulkan if it keeps up with the wall clock on this machine and "
@@ -462,14 +586,15 @@ def main():
         sys.exit(f"hapfluid: not built: {', '.join(missing)} (run `make`)")
 
     if args.batch:
-        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", args.backend, "--out", str(out / "sim")]
+        command = [str(bin_dir / "haptic-sim"), "--scene", str(scene_path), "--backend", args.backend,
+                   "--out", str(out / "sim"), "--export-every", str(args.export_every)]
         if args.duration:
             command += ["--duration", str(args.duration)]
         return subprocess.run(command).returncode
 
     started = time.monotonic()
-    ok, rig, device_logs, started_at = run_live(args, scene_path, out, bin_dir)
-    summary = post_process(out, rig, device_logs, scene_path.stem, started_at)
+    ok, rig, device_logs, started_at, cyclictest = run_live(args, scene_path, out, bin_dir)
+    summary = post_process(out, rig, device_logs, scene_path.stem, args.lead_in, started_at, cyclictest)
     summary["ok"] = ok
     summary["wall_s"] = round(time.monotonic() - started, 2)
     (out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")

@@ -10,6 +10,11 @@
         cyclictest (rt-tests) at the rig's SCHED_FIFO priority, period and CPU over the same window,
         then prints haptic-rt's wake latency next to cyclictest's.
 
+    latency_report.py TRACE --cyclictest-log FILE --window-ns START:END
+        a run made elsewhere (scripts/hapfluid.py: cyclictest beside the live stack, started with
+        start_cyclictest): the trace's ticks scheduled in [START, END] (CLOCK_MONOTONIC ns, the
+        window cyclictest ran) next to cyclictest's histogram output in FILE.
+
 Times are reported in microseconds. A deadline miss is a tick whose work ended after the next
 tick's scheduled wake time; overruns are the periods the loop skipped while re-phasing.
 """
@@ -51,6 +56,15 @@ def load_trace(path) -> dict:
     if data.shape[0] == 0:
         sys.exit(f"latency_report: {path}: the trace holds no ticks")
     return {name: data[:, i] for i, name in enumerate(header)}
+
+
+def select_window(trace: dict, start_ns: float, end_ns: float) -> dict:
+    """The ticks scheduled within [start_ns, end_ns] (CLOCK_MONOTONIC, as scheduled_ns)."""
+    keep = (trace["scheduled_ns"] >= start_ns) & (trace["scheduled_ns"] <= end_ns)
+    if not keep.any():
+        sys.exit(f"latency_report: no tick of the trace lies in the window {start_ns:.0f}..{end_ns:.0f} ns "
+                 f"(trace: {trace['scheduled_ns'][0]:.0f}..{trace['scheduled_ns'][-1]:.0f} ns)")
+    return {k: v[keep] for k, v in trace.items()}
 
 
 def summarize(trace: dict, skip_ms: float = 200.0) -> dict:
@@ -100,17 +114,24 @@ def histogram_png(trace: dict, summary: dict, path, cyclictest_hist=None):
     wake_us = trace["wake_latency_ns"] / 1e3
     compute_us = trace["compute_ns"] / 1e3
     fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-    top = max(50.0, float(np.percentile(wake_us, 99.99)) * 1.2)
-    bins = np.linspace(0, top, 120)
-    axes[0].hist(np.clip(wake_us, 0, top), bins=bins, log=True, alpha=0.8, label="haptic-rt")
+
+    def stats(p):
+        return f"p50 {p['p50']:.0f}, p99 {p['p99']:.0f}, p99.9 {p['p99.9']:.0f}, max {p['max']:.0f} µs"
+    # Log-spaced bins on a log axis: the bulk (µs) and the tail (ms) both readable in one panel.
+    top = max(50.0, float(wake_us.max()) * 1.1)
+    bins = np.geomspace(1.0, top, 120)
+    axes[0].hist(np.clip(wake_us, 1.0, top), bins=bins, log=True, alpha=0.8,
+                 label="haptic-rt: " + stats(summary["wake_latency_us"]))
     if cyclictest_hist is not None:
         us, counts = cyclictest_hist
-        axes[0].hist(np.clip(us, 0, top), bins=bins, weights=counts, log=True, alpha=0.5, label="cyclictest")
-    axes[0].set_xlabel("wake latency (µs)")
+        label = "cyclictest (histogram to 2 ms): " + stats(summary["cyclictest_us"]) if "cyclictest_us" in summary \
+            else "cyclictest"
+        axes[0].hist(np.clip(us, 1.0, top), bins=bins, weights=counts, log=True, alpha=0.5, label=label)
+    axes[0].set_xscale("log")
+    axes[0].set_xlabel("wake latency (µs, log scale)")
     axes[0].set_ylabel("ticks")
-    axes[0].set_title(f"wake latency: p99 {summary['wake_latency_us']['p99']:.1f} µs, "
-                      f"max {summary['wake_latency_us']['max']:.1f} µs")
-    axes[0].legend()
+    axes[0].set_title("wake latency" + (" beside cyclictest, same window" if cyclictest_hist is not None else ""))
+    axes[0].legend(fontsize=7, loc="upper right")
     top_c = max(5.0, float(np.percentile(compute_us, 99.99)) * 1.2)
     axes[1].hist(np.clip(compute_us, 0, top_c), bins=120, log=True, color="tab:green")
     axes[1].set_xlabel("loop compute per tick (µs)")
@@ -149,6 +170,12 @@ def cyclictest_percentiles(us, counts, overflows, max_latency) -> dict:
             "max": float(max_latency) if max_latency is not None else float(us[counts > 0].max()), "n": int(total)}
 
 
+def cyclictest_result(text: str):
+    """(percentiles, (µs buckets, counts)) of a finished cyclictest -h run's output."""
+    us, counts, overflows, max_latency = parse_cyclictest_histogram(text)
+    return cyclictest_percentiles(us, counts, overflows, max_latency), (us, counts)
+
+
 def read_rig_rt(rig_path) -> dict:
     """The [rt] settings cyclictest must share (priority, period_ns, cpu), via haptic-config's schema
     defaults: priority 80, period 1 ms, no pinning."""
@@ -159,10 +186,30 @@ def read_rig_rt(rig_path) -> dict:
             "cpu": int(rt.get("cpu", -1))}
 
 
-def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_devices=False, prefix=None):
-    """Runs haptic-rt (+ stand-in sim) and cyclictest over the same window; returns cyclictest's stats."""
+def start_cyclictest(rt_settings: dict, cpu: int | None = None, duration_s: float | None = None,
+                     stdout=subprocess.PIPE, stderr=subprocess.PIPE):
+    """cyclictest as the loop runs: one thread, SCHED_FIFO at the rig's rt.priority, woken every
+    rt.period_ns, memory locked, a 1 µs histogram up to 2 ms (output at its end), on `cpu` (default
+    the rig's rt.cpu; -1: any). Ends after duration_s, or when sent SIGINT (then it prints its
+    histogram too). None when cyclictest (rt-tests) is not installed.
+    (--secaligned, to wake at a chosen phase, was tried: rt-tests 2.40 here counted 1.1 s of
+    samples too many after one start in four, so its window could not be known.)"""
     cyclictest = shutil.which("cyclictest")
     if not cyclictest:
+        return None
+    cpu = rt_settings["cpu"] if cpu is None else cpu
+    args = [cyclictest, "-m", "-q", "-t1", f"-p{rt_settings['priority']}", f"-i{rt_settings['period_ns'] // 1000}",
+            "-h2000"]
+    if duration_s:
+        args.append(f"-D{int(round(duration_s))}")
+    if cpu >= 0:
+        args.append(f"-a{cpu}")
+    return subprocess.Popen(args, stdout=stdout, stderr=stderr, text=True)
+
+
+def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_devices=False, prefix=None):
+    """Runs haptic-rt (+ stand-in sim) and cyclictest over the same window; returns cyclictest's stats."""
+    if not shutil.which("cyclictest"):
         sys.exit("latency_report: --with-cyclictest needs cyclictest (apt install rt-tests)")
     rt_settings = read_rig_rt(rig)
     build = pathlib.Path(build)
@@ -171,10 +218,6 @@ def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_de
                "--duration", str(duration_s), "--trace", str(trace_path)]
     if not real_devices:
         rt_args.append("--simulated-devices")
-    ct_args = [cyclictest, "-m", "-q", "-t1", f"-p{rt_settings['priority']}",
-               f"-i{rt_settings['period_ns'] // 1000}", f"-D{int(round(duration_s))}", "-h2000"]
-    if rt_settings["cpu"] >= 0:
-        ct_args.append(f"-a{rt_settings['cpu']}")
     print(f"latency_report: running haptic-rt and cyclictest for {duration_s:g} s "
           f"(SCHED_FIFO {rt_settings['priority']}, period {rt_settings['period_ns'] / 1e3:g} µs)", file=sys.stderr)
     rt_proc = subprocess.Popen(rt_args, stderr=subprocess.PIPE, text=True)
@@ -184,7 +227,8 @@ def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_de
         sim = subprocess.Popen([str(standin), "--shm-prefix", prefix, "--rate", str(sim_rate_hz), "--devices", "4",
                                 "--pattern", "sine", "--force", "0.5,0,0.5", "--stiffness", "300", "--damping", "2"],
                                stderr=subprocess.DEVNULL)
-    ct = subprocess.run(ct_args, capture_output=True, text=True, timeout=duration_s + 60)
+    ct = start_cyclictest(rt_settings, duration_s=duration_s)
+    ct_out, ct_err = ct.communicate(timeout=duration_s + 60)
     _, rt_err = rt_proc.communicate(timeout=duration_s + 60)
     if sim:
         sim.send_signal(signal.SIGTERM)
@@ -192,9 +236,9 @@ def run_with_cyclictest(trace_path, rig, build, duration_s, sim_rate_hz, real_de
     if rt_proc.returncode != 0:
         sys.exit(f"latency_report: haptic-rt failed ({rt_proc.returncode}):\n{rt_err}")
     if ct.returncode != 0:
-        sys.exit(f"latency_report: cyclictest failed ({ct.returncode}): {ct.stderr.strip()}")
-    us, counts, overflows, max_latency = parse_cyclictest_histogram(ct.stdout)
-    return cyclictest_percentiles(us, counts, overflows, max_latency), (us, counts), rt_err
+        sys.exit(f"latency_report: cyclictest failed ({ct.returncode}): {ct_err.strip()}")
+    stats, hist = cyclictest_result(ct_out)
+    return stats, hist, rt_err
 
 
 def format_report(summary: dict, cyclictest: dict | None = None) -> str:
@@ -235,6 +279,9 @@ def main(argv=None):
     p.add_argument("--duration", type=float, default=30.0, help="seconds, for --with-cyclictest")
     p.add_argument("--sim-rate", type=float, default=100.0, help="stand-in sim rate in Hz (0: no sim)")
     p.add_argument("--real-devices", action="store_true", help="open the rig's devices instead of simulating")
+    p.add_argument("--cyclictest-log", help="cyclictest -h output of a run beside the loop (start_cyclictest)")
+    p.add_argument("--window-ns", help="START:END, CLOCK_MONOTONIC ns: only the ticks scheduled in this window "
+                                       "(the one cyclictest ran); no --skip-ms then")
     args = p.parse_args(argv)
 
     cyclictest, cyclictest_hist = None, None
@@ -243,8 +290,25 @@ def main(argv=None):
             p.error("--with-cyclictest needs --rig RIG (haptic-rt and cyclictest run together)")
         cyclictest, cyclictest_hist, _ = run_with_cyclictest(args.trace, args.rig, args.build, args.duration,
                                                              args.sim_rate, args.real_devices)
+    elif args.cyclictest_log:
+        log = pathlib.Path(args.cyclictest_log)
+        if not log.exists():
+            sys.exit(f"latency_report: --cyclictest-log {log}: no such file")
+        cyclictest, cyclictest_hist = cyclictest_result(log.read_text())
+        if cyclictest["n"] == 0:
+            sys.exit(f"latency_report: --cyclictest-log {log}: no histogram in it (was cyclictest run with -h "
+                     f"and stopped by SIGINT or -D?)")
     trace = load_trace(args.trace)
-    summary = summarize(trace, args.skip_ms)
+    skip_ms = args.skip_ms
+    if args.window_ns:
+        try:
+            start_ns, end_ns = (float(v) for v in args.window_ns.split(":"))
+        except ValueError:
+            p.error(f"--window-ns {args.window_ns}: must be START:END in ns")
+        trace, skip_ms = select_window(trace, start_ns, end_ns), 0.0
+    summary = summarize(trace, skip_ms)
+    if args.window_ns:
+        summary["window_s"] = round((end_ns - start_ns) * 1e-9, 3)
     if cyclictest:
         summary["cyclictest_us"] = cyclictest
     print(format_report(summary, cyclictest))

@@ -16,13 +16,15 @@ namespace {
 void usage(std::ostream& out) {
   out << "usage: haptic-sim --live --scene FILE [--rig FILE] [--shm-prefix NAME] [--out DIR] [--duration S]\n"
          "                  [--threads N] [--backend auto|vulkan|cpu] [--vk-device auto|gpu|cpu] [--max-lag S]\n"
-         "                  [--status-every S]\n"
+         "                  [--status-every S] [--export-every S]\n"
          "  --live              run as the live simulator: device poses from /<prefix>.device_states\n"
          "                      (haptic-rt), sim samples to /<prefix>.sim_samples, particle frames to\n"
          "                      /<prefix>.particles (haptic-render); simulated time follows the wall clock\n"
          "  --rig FILE          take the shm prefix and group from the rig's [rt.shm]\n"
          "  --shm-prefix NAME   shared-memory prefix (default: the rig's, else \"hapfluid\")\n"
          "  --out DIR           write couplings.csv, bodies.csv and stats.json of the live run\n"
+         "  --export-every S    particle frames DIR/particles/frame_NNNNNN.vtk every S simulated seconds, as\n"
+         "                      batch mode (at most the scene's frame rate; default 0: none; needs --out)\n"
          "  --duration S        stop after S seconds of wall time (default: until SIGINT/SIGTERM)\n"
          "  --threads N         worker threads of the cpu backend (default: all cores)\n"
          "  --backend B         auto (default): Vulkan (a GPU, else lavapipe) if a ~1 s probe at start shows it keeps\n"
@@ -67,6 +69,8 @@ int live_main(int argc, char** argv) {
       if (!accepted(std::cerr, a, v, parse_whole_number(v, 1, kMaxWorkerThreads, o.threads))) return 2;
     } else if (a == "--max-lag") {
       if (!accepted(std::cerr, a, v, parse_seconds(v, 0.001, false, o.max_lag_s))) return 2;
+    } else if (a == "--export-every") {
+      if (!accepted(std::cerr, a, v, parse_seconds(v, 0, false, o.export_every_s))) return 2;
     } else if (a == "--status-every") {
       if (!accepted(std::cerr, a, v, parse_seconds(v, 0, false, o.status_every_s))) return 2;
     } else {

@@ -117,6 +117,9 @@ class DeviceInput {
 struct Counters {
   std::uint64_t samples = 0, particle_frames = 0, device_records = 0, lag_events = 0;
   double dropped_backlog_s = 0, dt_min = 1e300, dt_max = 0, step_wall_max_s = 0;
+  int vtk_frames = 0;
+  double vtk_write_max_s = 0, vtk_write_total_s = 0;
+  std::string vtk_error;
 };
 
 std::string probe_json(const BackendProbe& p) {
@@ -157,7 +160,12 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
     << "  \"longest_step_wall_s\": " << num(c.step_wall_max_s) << ",\n"
     << "  \"sim_samples_published\": " << c.samples << ",\n"
     << "  \"particle_frames_published\": " << c.particle_frames << ",\n"
-    << "  \"device_records_read\": " << c.device_records << ",\n  \"device_matches\": [";
+    << "  \"vtk_export_every_s\": " << num(o.export_every_s) << ",\n"
+    << "  \"vtk_frames_written\": " << c.vtk_frames << ",\n"
+    << "  \"longest_vtk_write_s\": " << num(c.vtk_write_max_s) << ",\n"
+    << "  \"vtk_write_total_s\": " << num(c.vtk_write_total_s) << ",\n";
+  if (!c.vtk_error.empty()) j << "  \"vtk_export_error\": \"" << json_escape(c.vtk_error) << "\",\n";
+  j << "  \"device_records_read\": " << c.device_records << ",\n  \"device_matches\": [";
   for (std::size_t i = 0; i < device_map.size(); ++i) j << (i ? ", " : "") << "\"" << json_escape(device_map[i]) << "\"";
   j << "]\n}\n";
   return j.str();
@@ -168,6 +176,10 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
 int run_live(const LiveOptions& o, std::ostream& log) {
   if (o.threads < 1 || o.threads > kMaxWorkerThreads) {
     log << "haptic-sim: --threads " << o.threads << ": must be 1.." << kMaxWorkerThreads << "\n";
+    return 2;
+  }
+  if (o.export_every_s > 0 && o.out.empty()) {
+    log << "haptic-sim: --export-every " << o.export_every_s << ": needs --out DIR (frames go to DIR/particles/)\n";
     return 2;
   }
   std::string prefix = o.shm_prefix, group;
@@ -225,12 +237,14 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   sigaction(SIGTERM, &action, nullptr);
 
   std::optional<CsvFile> couplings_csv, bodies_csv;
+  std::optional<VtkFrameSeries> vtk_frames;
   try {
     if (!o.out.empty()) {
       std::filesystem::create_directories(o.out);
       remove_previous_outputs(o.out);  // no earlier run's stats.json, CSVs or frames pass for this run's
       couplings_csv.emplace(o.out / "couplings.csv", "t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick,publish_ns");
       bodies_csv.emplace(o.out / "bodies.csv", kBodiesCsvHeader);
+      if (o.export_every_s > 0) vtk_frames.emplace(o.out / "particles", o.export_every_s);
     }
   } catch (const std::exception& e) {
     log << "haptic-sim: --out " << o.out.string() << ": " << e.what() << "\n";
@@ -302,9 +316,31 @@ int run_live(const LiveOptions& o, std::ostream& log) {
     ++c.particle_frames;
   };
 
+  // VTK frames (the batch writer) from the particles a frame's read-back has just brought to the
+  // host: no read-back of their own on Vulkan. Written on this thread between two steps; what it
+  // costs is in stats.json (longest_vtk_write_s, vtk_write_total_s; README "VTK frames"). A write
+  // that fails (disk full) ends the export, said once, never the haptic run.
+  auto export_vtk = [&] {
+    if (!vtk_frames || !vtk_frames->due(solver->time_s())) return;
+    const std::uint64_t write_start = shm::monotonic_ns();
+    try {
+      vtk_frames->write(m, solver->time_s());
+    } catch (const std::exception& e) {
+      c.vtk_error = e.what();
+      log << "haptic-sim: VTK export stopped after " << c.vtk_frames << " frames: " << e.what() << "\n";
+      vtk_frames.reset();
+      return;
+    }
+    const double write_s = double(shm::monotonic_ns() - write_start) * 1e-9;
+    c.vtk_frames = vtk_frames->written();
+    c.vtk_write_max_s = std::max(c.vtk_write_max_s, write_s);
+    c.vtk_write_total_s += write_s;
+  };
+
   try {
     solver->sync_and_check_finite();
     publish_particles(start_ns);
+    export_vtk();
     while (!g_stop.load()) {
       std::uint64_t now = shm::monotonic_ns();
       if (o.duration_s > 0 && now - start_ns >= static_cast<std::uint64_t>(o.duration_s * 1e9)) break;
@@ -440,6 +476,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         // Once per frame: the particles come back (Vulkan) and a diverged fluid stops the run, named.
         solver->sync_and_check_finite();
         publish_particles(shm::monotonic_ns());
+        export_vtk();
         next_frame_s += frame_period;
         if (next_frame_s < solver->time_s()) next_frame_s = solver->time_s() + frame_period;
       }

@@ -34,6 +34,7 @@ struct LiveOptions {
   std::string vulkan_device = "auto";  // auto | gpu | cpu (lavapipe)
   std::string shm_prefix;          // empty: the rig's, else "hapfluid"
   std::filesystem::path out;       // empty: no files (couplings.csv, bodies.csv, stats.json)
+  double export_every_s = 0;       // VTK particle frames in out/particles/ every S simulated seconds; 0: none
   double duration_s = 0;           // wall seconds; 0: until SIGINT/SIGTERM
   int threads = 1;
   double max_lag_s = 0.1;          // backlog tolerated before the fluid is declared slower than real time

@@ -2,6 +2,7 @@
 
 #include <bit>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <stdexcept>
@@ -103,6 +104,22 @@ void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m
     if (!s) io_error("write failed for", part);
   }
   std::filesystem::rename(part, file);
+}
+
+VtkFrameSeries::VtkFrameSeries(std::filesystem::path dir, double interval_s)
+    : dir_(std::move(dir)), interval_s_(interval_s) {
+  if (interval_s_ > 0) std::filesystem::create_directories(dir_);
+}
+
+void VtkFrameSeries::write(const SimulationModel& model, double time_s) {
+  char name[64];
+  std::snprintf(name, sizeof name, "frame_%06d.vtk", written_);
+  write_vtk_frame(dir_ / name, model, time_s);
+  ++written_;
+  // A caller that looks less often than the interval (live: at the frame rate) gets one frame
+  // per look, not a burst to catch up.
+  next_s_ += interval_s_;
+  if (next_s_ <= time_s) next_s_ = time_s + interval_s_;
 }
 
 CsvFile::CsvFile(std::filesystem::path file, const std::string& header)

@@ -75,6 +75,7 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
 
   std::filesystem::create_directories(o.out / "particles");
   remove_previous_outputs(o.out);  // only now: a scene or device that fails leaves a previous run as it was
+  VtkFrameSeries vtk_frames(o.out / "particles", o.export_every_s);
   CsvFile bodies_csv(o.out / "bodies.csv", kBodiesCsvHeader);
   CsvFile couplings_csv(o.out / "couplings.csv", kCouplingsCsvHeader);
 
@@ -82,7 +83,6 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
   double dt_min = 1e300, dt_max = 0;
   const double frame = 1.0 / m.params.frame_rate_hz;
   const int frames = std::max(1, static_cast<int>(std::ceil(duration / frame - 1e-9)));
-  double next_export = 0;
   const bool per_substep_devices = !m.couplings.empty();
   const auto start = std::chrono::steady_clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(); };
@@ -95,13 +95,10 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
     for (const VirtualCoupling& c : m.couplings) couplings_csv.row(coupling_row(m, c, t));
   };
   auto export_frame = [&](double t) {
-    if (o.export_every_s <= 0 || t + 1e-9 < next_export) return;
+    if (!vtk_frames.due(t)) return;
     solver.sync_particles();  // particle arrays come back only for a frame
-    char name[64];
-    std::snprintf(name, sizeof name, "frame_%06d.vtk", r.frames_exported);
-    write_vtk_frame(o.out / "particles" / name, m, t);
-    ++r.frames_exported;
-    next_export += o.export_every_s;
+    vtk_frames.write(m, t);
+    r.frames_exported = vtk_frames.written();
   };
 
   std::string error;

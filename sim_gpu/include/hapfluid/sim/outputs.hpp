@@ -15,6 +15,23 @@ namespace hapfluid::sim {
 // pressure, kind (0 fluid, 1 wall, 2 body), body index (-1 for fluid and walls) and id.
 void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& model, double time_s);
 
+// A run's particle frames: DIR/frame_NNNNNN.vtk every `interval_s` of simulated time (haptic-sim
+// --export-every, batch and live alike; 0: none). The constructor creates DIR; an earlier run's
+// frames there are remove_previous_outputs' to remove, before.
+class VtkFrameSeries {
+ public:
+  VtkFrameSeries(std::filesystem::path dir, double interval_s);
+  bool due(double time_s) const { return interval_s_ > 0 && time_s + 1e-9 >= next_s_; }
+  // Writes the next frame of `model` at `time_s` (throws std::runtime_error naming the file).
+  void write(const SimulationModel& model, double time_s);
+  int written() const { return written_; }
+
+ private:
+  std::filesystem::path dir_;
+  double interval_s_ = 0, next_s_ = 0;
+  int written_ = 0;
+};
+
 // A CSV file written row by row to "<file>.part" and renamed to <file> by finish().
 class CsvFile {
  public:

@@ -1,0 +1,150 @@
+"""scripts/scenario_checks.py: each of the paper's qualitative results is judged on a run folder's
+histories, holds on histories that show it and fails, saying why, on histories that do not.
+Synthetic run folders as scripts/hapfluid.py leaves them (summary.json, scene.toml, sim/couplings.csv,
+device_<name>.csv), on the shipped scenes' scripts."""
+import json
+import math
+import shutil
+import tomllib
+
+import numpy as np
+import pytest
+
+OFFSET_S = 0.2   # scene time 0 at 0.2 s of the sim's wall clock
+LEAD_IN_S = 1.5
+
+
+@pytest.fixture(scope="module")
+def checks(script):
+    return script("scenario_checks")
+
+
+def make_run(folder, source_dir, scene, wrench, end_s, device_log=None, batch=False):
+    """wrench(device, t) -> (fx, fy, fz, tx, ty, tz) at scene time t, sampled at 500 Hz up to end_s.
+    batch: the history is a batch run's (batch/couplings.csv, t = scene time; a live run's sim/
+    beside it holds a contrary history, which must not be judged)."""
+    (folder / "sim").mkdir(parents=True)
+    if batch:
+        make_run(folder / "batch-tmp", source_dir, scene, wrench, end_s)
+        rows = (folder / "batch-tmp" / "sim" / "couplings.csv").read_text().splitlines()
+        (folder / "batch").mkdir()
+        shifted = [f"{float(r.split(',')[0]) - OFFSET_S:.4f}," + r.split(",", 1)[1] for r in rows[1:]]
+        (folder / "batch" / "couplings.csv").write_text("\n".join([rows[0]] + shifted) + "\n")
+        wrench = lambda d, t: (0,) * 6  # noqa: E731  (the live history: no load anywhere)
+    shutil.copy(source_dir / "config" / "scenes" / f"{scene}.toml", folder / "scene.toml")
+    (folder / "summary.json").write_text(json.dumps({"script_offset_s": OFFSET_S, "lead_in_s": LEAD_IN_S}))
+    devices = [d["name"] for d in tomllib.loads((folder / "scene.toml").read_text())["devices"]]
+    lines = ["t,device,body,fx,fy,fz,tx,ty,tz,wall_s,device_tick,publish_ns"]
+    for k, t in enumerate(np.arange(-OFFSET_S, end_s, 0.002)):
+        for d in devices:
+            w = ",".join(f"{v:.6f}" for v in wrench(d, t))
+            lines.append(f"{t + OFFSET_S:.4f},{d},b,{w},{t + OFFSET_S:.4f},{k},{k}")
+    (folder / "sim" / "couplings.csv").write_text("\n".join(lines) + "\n")
+    if device_log:
+        rows = ["t_s,px,applied_fx"] + [f"{t + LEAD_IN_S:.4f},{px:.6f},{fx:.6f}" for t, px, fx in device_log]
+        (folder / "device_hand.csv").write_text("\n".join(rows) + "\n")
+    return folder
+
+
+def stroke_log(sign):
+    # spoon_stirring: 0.08 m at 0.5 Hz from 1 s; the fluid's drag -c v (sign -1) or a force along v (+1).
+    out = []
+    for t in np.arange(-LEAD_IN_S, 8.0, 0.001):
+        w = 2 * math.pi * 0.5
+        px = 0.08 * math.sin(w * (t - 1.0)) if t > 1.0 else 0.0
+        vx = 0.08 * w * math.cos(w * (t - 1.0)) if t > 1.0 else 0.0
+        out.append((t, px, sign * 3.0 * vx))
+    return out
+
+
+@pytest.mark.parametrize("sign, holds", [(-1, True), (+1, False)])
+def test_stirring_holds_only_when_the_force_opposes_the_stroke(checks, source_dir, tmp_path, sign, holds):
+    run = make_run(tmp_path / "run", source_dir, "spoon_stirring", lambda d, t: (0,) * 6, 8.0, stroke_log(sign))
+    verdict = checks.check("stirring", [run])
+    assert verdict.holds is holds, verdict.text
+    assert ("opposes the stroke" if holds else "does NOT oppose") in verdict.text
+    assert (verdict.numbers["mean_force_times_velocity_w"] < 0) is holds
+
+
+def test_a_run_too_short_for_the_stroke_cannot_be_judged(checks, source_dir, tmp_path):
+    run = make_run(tmp_path / "run", source_dir, "spoon_stirring", lambda d, t: (0,) * 6, 1.8, stroke_log(-1))
+    verdict = checks.check("stirring", [run])
+    assert not verdict.holds and "too short" in verdict.text
+
+
+def pour(shift_n):
+    # bowl_pouring: tilt 1-8 s. The bowl hand's load falls by shift_n once poured, the pan's rises.
+    def wrench(device, t):
+        poured = shift_n * min(max((t - 2.0) / 2.0, 0.0), 1.0)
+        load = {"left": 5.0 - poured, "right": 6.0 + poured}[device]
+        return 0, 0, -load, 0, 0, 0
+    return wrench
+
+
+@pytest.mark.parametrize("shift_n, holds", [(1.2, True), (0.5, False), (0.0, False), (-1.2, False)])
+def test_pouring_holds_when_the_load_moves_from_the_bowl_hand_to_the_pan_hand(checks, source_dir, tmp_path,
+                                                                              shift_n, holds):
+    run = make_run(tmp_path / "run", source_dir, "bowl_pouring", pour(shift_n), 9.0)
+    verdict = checks.check("pouring", [run])
+    assert verdict.holds is holds, verdict.text
+    assert verdict.numbers["bowl_load_n"][0] == pytest.approx(5.0, abs=0.01)
+    assert verdict.numbers["pan_load_n"][1] == pytest.approx(6.0 + shift_n, abs=0.01)
+
+
+def test_pouring_judged_before_the_bowl_is_back_cannot_be_judged(checks, source_dir, tmp_path):
+    run = make_run(tmp_path / "run", source_dir, "bowl_pouring", pour(1.2), 7.5)
+    verdict = checks.check("pouring", [run])
+    assert not verdict.holds and "run longer" in verdict.text
+
+
+@pytest.mark.parametrize("torques, holds", [((0.02, 0.04, 0.06, 0.08), True), ((0.02, 0.05, 0.052, 0.08), False),
+                                            ((0.08, 0.06, 0.04, 0.02), False), ((0.02, 0.06, 0.03, 0.08), False)])
+def test_glass_holds_when_the_spin_torque_grows_with_the_containers_viscosity(checks, source_dir, tmp_path,
+                                                                             torques, holds):
+    # The scenes' containers: 2, 10, 20, 40 Pa s; spin 1-4 s about z. Each step must add > 10%.
+    runs = []
+    for viscosity, torque in zip((2, 10, 20, 40), torques):
+        spin = lambda d, t, torque=torque: (0, 0, 0, 0, 0, -torque if 1.2 < t < 3.8 else 0.0)  # noqa: E731
+        runs.append(make_run(tmp_path / f"glass_{viscosity}", source_dir, f"spinning_glass_{viscosity}", spin, 6.0))
+    verdict = checks.check("glass", runs)
+    assert verdict.holds is holds, verdict.text
+    assert verdict.numbers["viscosity_pa_s"] == [2, 10, 20, 40]
+    assert verdict.numbers["spin_torque_nm"][0] == pytest.approx(torques[0], rel=0.05)  # the spin minus its ramps
+
+
+@pytest.mark.parametrize("left_share, holds", [(0.5, True), (0.35, True), (0.9, False)])
+def test_bucket_holds_when_both_hands_carry_a_comparable_share(checks, source_dir, tmp_path, left_share, holds):
+    weight = 15.0
+    share = {"left": left_share, "right": 1 - left_share}
+    run = make_run(tmp_path / "run", source_dir, "bucket_bimanual", lambda d, t: (0, 0, -weight * share[d], 0, 0, 0), 9.0)
+    verdict = checks.check("bucket", [run])
+    assert verdict.holds is holds, verdict.text
+    assert verdict.numbers["total_n"] == pytest.approx(weight, abs=0.01)
+
+
+@pytest.mark.parametrize("spilled, holds", [(False, True), (True, False)])
+def test_crepe_holds_when_the_batter_moves_to_the_pan_and_stays_while_spread(checks, source_dir, tmp_path,
+                                                                          spilled, holds):
+    def wrench(device, t):
+        poured = 1.0 * min(max((t - 2.0) / 2.0, 0.0), 1.0)
+        lost = 1.0 if spilled and t > 10.0 else 0.0  # spread: the batter slides out of the pan
+        load = {"left": 5.0 - poured, "right": 6.0 + poured - lost}[device]
+        return 0, 0, -load, 0, 0, 0
+    run = make_run(tmp_path / "run", source_dir, "crepe", wrench, 14.0)
+    verdict = checks.check("crepe", [run])
+    assert verdict.holds is holds, verdict.text
+    assert "the load moves to the pan's hand" in verdict.text
+
+
+def test_a_folder_without_a_run_is_named(checks, tmp_path):
+    verdict = checks.check("stirring", [tmp_path / "nothing"])
+    assert not verdict.holds and "cannot judge" in verdict.text and "nothing/scene.toml" in verdict.text
+
+
+def test_a_batch_judged_scenario_reads_the_batch_history_on_simulated_time(checks, source_dir, tmp_path):
+    # run_scenarios.py judges a scene whose live sim ran far slower than real time on its batch run.
+    run = make_run(tmp_path / "run", source_dir, "bowl_pouring", pour(1.2), 9.0, batch=True)
+    assert not checks.check("pouring", [run]).holds  # the live history (no load) fails
+    verdict = checks.check("pouring", [run], batch=True)
+    assert verdict.holds and verdict.numbers["judged_on"] == "batch", verdict.text
+    assert verdict.numbers["pan_load_n"] == pytest.approx([6.0, 7.2], abs=0.01)
