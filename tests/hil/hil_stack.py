@@ -78,6 +78,27 @@ class Stack:
         self.procs = {}
         self.started_at = {}
 
+    def scene_variant(self, scene, name, **motion):
+        """A copy of a shipped scene whose scripted device motions have these keys replaced (scene
+        time, before the lead-in), e.g. stop_s=4.5 for a hand that comes to rest then (an
+        oscillation fades out to its start pose). For fake_device's motion="scene:<path>:<device>";
+        the simulator keeps the shipped scene. Lives in <dir>/scenes beside a link to the shipped
+        meshes, so the scene's relative mesh paths still resolve."""
+        scenes, meshes = self.dir / "scenes", self.dir / "meshes"
+        scenes.mkdir(exist_ok=True)
+        if not meshes.exists():
+            meshes.symlink_to(SCENES.parent / "meshes")
+        lines, in_motion = [], False
+        for line in (SCENES / f"{scene}.toml").read_text().splitlines():
+            stripped = line.split("#")[0].strip()
+            if stripped.startswith("["):
+                in_motion = stripped == "[[devices.motion]]"
+            key = stripped.split("=", 1)[0].strip()
+            lines.append(f"{key} = {motion[key]}" if in_motion and "=" in stripped and key in motion else line)
+        path = scenes / f"{name}.toml"
+        path.write_text("\n".join(lines) + "\n")
+        return path
+
     # ---- processes -------------------------------------------------------------------------
     def _start(self, name, args, stdout=None, nice=0):
         log = open(self.dir / f"{name}.log", "a")
