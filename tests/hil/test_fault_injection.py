@@ -258,8 +258,9 @@ def test_parts_restart_in_any_order(stack):
 
 def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
     # SIGSTOP freezes the real simulator for 0.6 s (a stall, not a crash): the loop ramps the
-    # wrench to zero, and after SIGCONT the sim drops its backlog instead of racing through it —
-    # saying so (a fluid running late is never silent) — and the wrench fades back in.
+    # wrench to zero while keeping its 1 kHz rate and its commands to the device, and after SIGCONT
+    # the sim drops its backlog instead of racing through it — saying so (a fluid running late is
+    # never silent) — and the wrench fades back in.
     stack.fake_device("hand", motion=STIR)
     stack.rt()
     stack.sim("spoon_stirring")
@@ -276,6 +277,7 @@ def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
     s = wall_to_trace_s(trace, stopped)
     frozen = [r for r, ti in zip(trace, t) if s + STALE_PLUS_RAMP_S + 0.02 < ti < s + 0.55]
     assert frozen and all(force(r) < 1e-9 and int(r["d0_faults"]) & FAULT_SIM_STALE for r in frozen)
+    assert_loop_kept_its_rate(stack, trace, t, s, 0.6)  # the stall never reaches the loop
     resumed = [r for r, ti in zip(trace, t) if ti > s + 1.2]
     assert max(force(r) for r in resumed) > 0.3 and not any(int(r["d0_faults"]) & FAULT_SIM_STALE for r in resumed[-300:])
     assert "cannot keep up with the wall clock" in stack.log("sim")
