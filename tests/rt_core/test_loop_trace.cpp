@@ -3,10 +3,10 @@
 // sent (wire sequence numbers, protocol.md §3) and the device_states tick the rendered sim sample
 // was computed from.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/loop.hpp"
+#include "loop_test_rig.hpp"
 
 using namespace hapfluid;
 
@@ -43,16 +43,7 @@ class NumberedDevice final : public device::Device {
 }  // namespace
 
 TEST(LoopTrace, EveryRecordNamesTheStateFrameUsedTheCommandSentAndTheSimSamplesDeviceTick) {
-  config::Rig rig = config::parse_rig(R"(
-[rt]
-trace_ring_records = 64
-[[devices]]
-name = "arm"
-[devices.transport]
-kind = "loopback"
-address = "/tmp/unused"
-)", "trace-test.toml");
-  rig.rt.shm.prefix = "hapfluid-tracetest-" + std::to_string(::getpid());
+  config::Rig rig = rt_test::one_device_rig("arm", "trace-test", 64);
   auto owned = std::make_unique<NumberedDevice>();
   NumberedDevice* device = owned.get();
   std::vector<std::unique_ptr<device::Device>> devices;
