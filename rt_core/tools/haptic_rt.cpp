@@ -119,13 +119,9 @@ int main(int argc, char** argv) {
       return 2;
     }
     if (args.simulated) std::fprintf(stderr, "haptic-rt: device \"%s\": SIMULATED handle (no hardware)\n", d.name.c_str());
-    else if (!device->health().connected)  // silent through the handshake: absent, unpowered or not started
-      std::fprintf(stderr,
-                   "haptic-rt: device \"%s\" (%s %s) is not talking: the loop holds it at a link fault with zero "
-                   "wrench and takes it up when its frames arrive; power and connect it (an emulated arm: "
-                   "haptic-fake-device --rig %s --device %s)\n",
-                   d.name.c_str(), config::to_string(d.transport.kind), d.transport.address.c_str(), args.rig.c_str(),
-                   d.name.c_str());
+    else if (!device->health().connected)
+      std::fprintf(stderr, "haptic-rt: %s; meanwhile the loop holds it at a link fault with zero wrench\n",
+                   rt::silent_device_hint(d, args.rig).c_str());
     devices.push_back(std::move(device));
   }
 

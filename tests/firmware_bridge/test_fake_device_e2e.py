@@ -3,6 +3,7 @@ every framing: what haptic-rt will see on a rig. Rates, latencies and watchdog t
 checked with margins that hold on a loaded 2-core CI machine; the bench reports the real numbers.
 """
 import csv
+import json
 import time
 
 import pytest
@@ -333,3 +334,15 @@ def test_the_log_stamps_every_state_sent_and_command_taken_on_the_machines_clock
     assert len(sent) == summary["states_sent"] and len(rows) - len(sent) == summary["states_dropped"] > 0
     assert sent == sorted(sent) and len(set(sent)) == len(sent), "one STATE per tick, numbered in order"
     assert sum(r["cmd_received"] == "1" for r in rows) > 500
+
+
+def test_a_host_without_its_device_waits_and_says_what_to_start(programs, tmp_path):
+    # No fake device on the bus yet: the host opens anyway (it may come up first), sees nothing,
+    # and names the command that starts the device.
+    _, prober = programs
+    sock = tmp_path / "nobody.sock"
+    result = probe(prober, sock, "--duration", 0.2, check=False)
+    assert result.returncode == 0, result.stderr
+    assert "is not talking" in result.stderr and f"haptic-fake-device --transport loopback --address {sock}" in result.stderr
+    report = json.loads(result.stdout)
+    assert report["states"] == 0 and report["connected"] is False

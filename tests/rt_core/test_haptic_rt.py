@@ -241,8 +241,8 @@ def test_a_device_that_is_not_there_yet_is_held_at_a_link_fault_and_named(binary
                              "--trace", str(tmp_path / "trace.csv"), "--flight-dir", str(tmp_path / "flight")],
                             capture_output=True, text=True, timeout=10)
     assert result.returncode == 0, result.stderr
-    assert 'device "right"' in result.stderr and "is not talking" in result.stderr
-    assert f"haptic-fake-device --rig {rig} --device right" in result.stderr
+    assert "device 'right'" in result.stderr and "is not talking" in result.stderr
+    assert f"start haptic-fake-device --rig {rig} --device right" in result.stderr
     rows = read_trace(tmp_path / "trace.csv")
     assert len(rows) > 100
     assert all(int(r["d0_faults"]) & FAULT_LINK_TIMEOUT and norm(force(r)) == 0 for r in rows)
