@@ -11,27 +11,12 @@ import time
 import numpy as np
 import pytest
 
-from hil_stack import FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, LINK_FAULTS, SCENES, Stack, norm3, read_csv
+from hil_stack import (FAULT_SIM_STALE, LINK_FAULTS, SCENES, Stack, assert_renders_the_sims_wrench,
+                       assert_within_limits, force, norm3, read_csv, trace_time_s, wall_to_trace_s)
 
 MAX_FORCE_N, MAX_TORQUE_NM = 8.0, 0.4
 STALE_PLUS_RAMP_S = 0.050 + 0.100
 STIR = f"scene:{SCENES / 'spoon_stirring.toml'}:hand"
-FLAG_WAITING_TO_ENGAGE = 1 << 7  # safety::flag_waiting_to_engage
-FLAG_ENGAGING = 1 << 8  # safety::flag_engaging (ramping in)
-
-
-def force(row, d=0):
-    return (row[f"d{d}_fx"] ** 2 + row[f"d{d}_fy"] ** 2 + row[f"d{d}_fz"] ** 2) ** 0.5
-
-
-def trace_time_s(trace):
-    t0 = trace[0]["scheduled_ns"]
-    return np.array([(r["scheduled_ns"] - t0) * 1e-9 for r in trace])
-
-
-def wall_to_trace_s(trace, monotonic_s):
-    """A time.monotonic() instant (CLOCK_MONOTONIC, as the trace's scheduled_ns) on the trace's axis."""
-    return monotonic_s - trace[0]["scheduled_ns"] * 1e-9
 
 
 @pytest.fixture
@@ -63,14 +48,6 @@ def sleep_until(monotonic_s):
     time.sleep(max(0.0, monotonic_s - time.monotonic()))
 
 
-def sim_wrench_in_use(trace, sim_dir):
-    """Per trace row, the force (N) of the sim sample the loop rendered in that tick, from the
-    sim's own log (sim/couplings.csv, one coupling: the scene's hand), or None for another sim's
-    sample or none."""
-    by_publish = {int(r["publish_ns"]): (r["fx"], r["fy"], r["fz"]) for r in read_csv(sim_dir / "couplings.csv")}
-    return [by_publish.get(int(r["sim_publish_ns"])) for r in trace]
-
-
 # The killed-sim test's hand (device time): holds still through the lead-in (the loop engages the
 # first sim), strokes from LEAD_IN_S + 1 s until REST_AT_S, then rests at its start pose, where a
 # restarted sim's spoon starts too. The sim is SIGKILLed at KILL_AT_S, under the resting load, and
@@ -78,7 +55,9 @@ def sim_wrench_in_use(trace, sim_dir):
 REST_AT_S = 4.0
 KILL_AT_S = 5.0
 RESTART_AT_S = 6.0
-RECOVERY_BOUND_S = 1.5  # restarted sim's first sample -> its wrench rendered (gate + ramp + margin)
+# Restarted sim's first sample -> its wrench on the hand: the gate waits for the load to be
+# steady, while the restarted fluid still sloshes around the spoon (measured 0.5-2.0 s).
+RECOVERY_BOUND_S = 2.5
 
 
 def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_again(stack):
@@ -105,7 +84,7 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     sleep_until(device_t0 + RESTART_AT_S)
     restarted_ns = time.monotonic_ns()
     stack.sim("spoon_stirring", name="sim2")
-    time.sleep(2.5)
+    time.sleep(RECOVERY_BOUND_S + 1.2)  # its first sample comes ~0.5 s after the start
     codes = {n: stack.stop(n) for n in ("rt", "sim2", "fake-hand")}
     assert codes == {"rt": 0, "sim2": 0, "fake-hand": 0}
     assert stack.leftovers() == []
@@ -123,28 +102,12 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     assert any(int(r["d0_faults"]) & FAULT_SIM_STALE for _, r in dead)
     assert_loop_kept_its_rate(stack, trace, t, k, 1.0)
 
-    # Recovery: from the restarted sim's first sample in the loop, within RECOVERY_BOUND_S, the
-    # hand gets that sim's wrench: engaged (no gate, no fault), fresh samples, and the force the
-    # loop renders is the one the restarted sim computed for that very sample (its couplings.csv).
+    # Recovery: within RECOVERY_BOUND_S of the restarted sim's first sample in the loop, the hand
+    # gets that sim's wrench: engaged, from fresh samples, the very F0 the restarted sim logged for
+    # the sample in use (its couplings.csv), and keeps it.
     first = next(i for i, r in enumerate(trace) if r["sim_publish_ns"] >= restarted_ns)
-    recovered = [i for i in range(len(trace)) if t[i] > t[first] + RECOVERY_BOUND_S]
-    assert len(recovered) > 400, "the run went on long enough after the bound"
-    engaged = [not int(trace[i]["d0_faults"]) and not int(trace[i]["d0_flags"]) & (FLAG_WAITING_TO_ENGAGE | FLAG_ENGAGING)
-               for i in recovered]
-    # (a 5 ms link timeout now and then, and its re-engage, on a loaded machine without PREEMPT_RT)
-    assert np.mean(engaged) > 0.95, f"engaged in {np.mean(engaged):.0%} of the ticks after the bound"
-    assert np.percentile([trace[i]["sim_age_ns"] for i in recovered], 99) < 50e6, "fresh samples"
-    sim_force = sim_wrench_in_use(trace, stack.dir / "sim2")
-    pairs = [(np.array([trace[i]["d0_fx"], trace[i]["d0_fy"], trace[i]["d0_fz"]]), np.array(sim_force[i]))
-             for i, e in zip(recovered, engaged) if e and sim_force[i] is not None]
-    assert len(pairs) > 0.9 * len(recovered), "the loop renders the restarted sim's samples"
-    rendered = np.array([np.linalg.norm(f) for f, _ in pairs])
-    error = np.array([np.linalg.norm(f - f0) for f, f0 in pairs])
-    print(f"restarted sim: first sample {t[first] - k:.2f} s after the kill; rendered {np.median(rendered):.3f} N "
-          f"(max {rendered.max():.3f}), |F - F0| median {np.median(error):.4f} max {error.max():.4f} N")
-    assert np.median(rendered) > 0.05, "a resting spoon in the pool still weighs on the hand"
-    # At rest F = F0 - K (x - x0) + D (v0 - v) is F0 up to the hand's few-ms drift (300 N/m).
-    assert np.median(error) < 0.05 and np.percentile(error, 99) < 0.3
+    got = assert_renders_the_sims_wrench(trace, stack.dir / "sim2", t[first], RECOVERY_BOUND_S)
+    print(f"restarted sim: first sample {t[first] - k:.2f} s after the kill; {got}")
 
 
 @pytest.mark.parametrize("pattern", ["huge", "nan"])
@@ -157,12 +120,7 @@ def test_a_hostile_then_stalled_sim_writer_never_pushes_beyond_the_limits(stack,
     time.sleep(2.5)
     codes = {n: stack.stop(n) for n in ("rt", "standin", "fake-hand")}
     assert codes == {"rt": 0, "standin": 0, "fake-hand": 0}
-    log = read_csv(stack.dir / "fake-hand.csv")
-    applied = np.array([[r["applied_fx"], r["applied_fy"], r["applied_fz"]] for r in log])
-    torque = np.array([[r["applied_tx"], r["applied_ty"], r["applied_tz"]] for r in log])
-    assert np.all(np.isfinite(applied)) and np.all(np.isfinite(torque))
-    assert np.max(np.linalg.norm(applied, axis=1)) <= MAX_FORCE_N * 1.001
-    assert np.max(np.linalg.norm(torque, axis=1)) <= MAX_TORQUE_NM * 1.001
+    assert_within_limits(read_csv(stack.dir / "fake-hand.csv"), MAX_FORCE_N, MAX_TORQUE_NM)
     trace = read_csv(stack.dir / "rt-trace.csv")
     t = trace_time_s(trace)
     stalled = [r for r, ti in zip(trace, t) if ti > t[-1] - 0.5]  # > 0.5 s after the stall began
