@@ -8,7 +8,9 @@ tracked by the Popen objects the harness started and stopped by pid, never by na
 Start order, as `make run` and the systemd target: devices, then haptic-rt (it engages its
 devices at zero wrench), then the simulator, whose wrench then fades in. A loop started under a
 sim already pushing more than the rig's engage_threshold_n waits for the wrench to drop below it
-or to hold steady for engage_hold_ms."""
+or to hold steady for engage_hold_ms. Every other order works too (test_start_order.py): haptic-rt
+holds a device that is not there yet at a link fault, the sim plays its scene's scripted hands
+until the loop's device states appear, the renderer waits for the sim."""
 import csv
 import os
 import pathlib
