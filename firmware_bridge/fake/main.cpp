@@ -44,7 +44,8 @@ const char* kUsage = R"(usage: haptic-fake-device [options]
   --rate-hz HZ                 state rate (default 1000)
   --watchdog-ms MS             command watchdog (default 20)
   --max-force-n N --max-torque-nm T   motor limits (default 12, 0.8)
-  --log FILE.csv               per-tick log: command received, force applied, hand force, pose
+  --log FILE.csv               per-tick log: command received, force applied, hand force, pose, and
+                               on CLOCK_MONOTONIC the tick, the STATE it sent, the commands it took
   --summary FILE.json          statistics at exit (also printed on stdout)
 fault injection:
   --drop-probability P         drop each outgoing STATE with probability P
@@ -242,9 +243,12 @@ int run(const Options& o) {
     if (!log) throw std::runtime_error("cannot write the log " + o.log_path + ": " + std::strerror(errno));
     static char buffer[1 << 16];
     std::setvbuf(log, buffer, _IOFBF, sizeof buffer);
+    // t_s is the device's own timeline; tick_ns is the same instant on CLOCK_MONOTONIC (the clock
+    // of every *_ns stamp on the machine), rx_ns when this tick took its commands off the link, and
+    // state_seq the sequence of the STATE this tick sampled and sent (-1: none left the device).
     std::fputs("t_s,cmd_received,cmd_seq,cmd_fx,cmd_fy,cmd_fz,cmd_tx,cmd_ty,cmd_tz,cmd_flags,"
                "applied_fx,applied_fy,applied_fz,applied_tx,applied_ty,applied_tz,hand_fx,hand_fy,hand_fz,"
-               "px,py,pz,qw,qx,qy,qz,status,faults\n", log);
+               "px,py,pz,qw,qx,qy,qz,status,faults,tick_ns,rx_ns,state_seq\n", log);
   }
 
   std::printf("haptic-fake-device: ready on %s (framing %s, node %u, watchdog %d ms)\n",
@@ -265,11 +269,12 @@ int run(const Options& o) {
   double next_heartbeat_s = 0, next_fault_s = 0;
   bool stopped_answering_logged = false;
 
+  // false: the message never leaves the device (silent, bus-off, delay queue full, link refused).
   auto transmit = [&](hf_message m, double t) {
-    if (o.silent_after_s >= 0 && t >= o.silent_after_s) return;
-    if (o.bus_off_at_s >= 0 && t >= o.bus_off_at_s && t < o.bus_off_at_s + o.bus_off_ms * 1e-3) return;
-    if (o.delay_ms > 0) { delayed.push(m, t + o.delay_ms * 1e-3); return; }
-    link->send(m);
+    if (o.silent_after_s >= 0 && t >= o.silent_after_s) return false;
+    if (o.bus_off_at_s >= 0 && t >= o.bus_off_at_s && t < o.bus_off_at_s + o.bus_off_ms * 1e-3) return false;
+    if (o.delay_ms > 0) return delayed.push(m, t + o.delay_ms * 1e-3);
+    return link->send(m);
   };
 
   // A real device's MCU never misses a tick. The emulator shares a CPU with everything else, so
@@ -288,6 +293,7 @@ int run(const Options& o) {
     const double t = (wake - t0) * 1e-9;
     if (o.duration_s > 0 && t >= o.duration_s) break;
     ++ticks;
+    long state_seq_sent = -1;
 
     // 1. receive (unless the firmware hangs or the controller is bus-off)
     firmware.begin_tick();
@@ -302,6 +308,7 @@ int run(const Options& o) {
       hf_message m;
       while (link->receive(m) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
     }
+    const std::uint64_t received_ns = now_ns();  // after the drain: no command counts as taken before it left the host
     // 2. bus-off injection: error frames exactly as a CAN controller reports them
     if (in_bus_off && !bus_off_reported && link->framing() != device::Framing::hid &&
         link->framing() != device::Framing::bulk) {
@@ -363,7 +370,7 @@ int run(const Options& o) {
           link->corrupt_next(1);
           ++states_corrupted;
         }
-        transmit(m, t);
+        if (transmit(m, t)) state_seq_sent = m.seq;
         ++states_sent;
       }
       while (delayed.tail < delayed.head && delayed.due_s[delayed.tail % DelayQueue::kSize] <= t) {
@@ -376,13 +383,14 @@ int run(const Options& o) {
       const fake::TickRecord& r = firmware.record();
       hf_state s = firmware.state(0);
       std::fprintf(log, "%.6f,%d,%u,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%u,%.4f,%.4f,%.4f,%.5f,%.5f,%.5f,%.4f,%.4f,%.4f,"
-                        "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%u,%u\n",
+                        "%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%u,%u,%llu,%llu,%ld\n",
                    t, r.command_received ? 1 : 0, r.command_seq, r.command.force_n[0], r.command.force_n[1],
                    r.command.force_n[2], r.command.torque_nm[0], r.command.torque_nm[1], r.command.torque_nm[2],
                    r.command.flags, r.applied_force_n[0], r.applied_force_n[1], r.applied_force_n[2],
                    r.applied_torque_nm[0], r.applied_torque_nm[1], r.applied_torque_nm[2], r.hand_force_n[0],
                    r.hand_force_n[1], r.hand_force_n[2], s.position_m[0], s.position_m[1], s.position_m[2],
-                   s.orientation[0], s.orientation[1], s.orientation[2], s.orientation[3], r.status, r.faults);
+                   s.orientation[0], s.orientation[1], s.orientation[2], s.orientation[3], r.status, r.faults,
+                   static_cast<unsigned long long>(wake), static_cast<unsigned long long>(received_ns), state_seq_sent);
     }
   }
   if (log) std::fclose(log);

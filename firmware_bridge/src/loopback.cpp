@@ -73,8 +73,12 @@ LoopbackTransport::LoopbackTransport(const std::string& path, LoopbackRole role,
   if (::connect(fd_, reinterpret_cast<const sockaddr*>(&address), length) != 0) {
     int error = errno;
     ::close(fd_);
-    throw TransportError("loopback: no bus at '" + path + "' (" + errno_text(error) +
-                         "): start haptic-fake-device --transport loopback --address " + path + " first");
+    fd_ = -1;
+    if (error != ENOENT && error != ECONNREFUSED)
+      throw TransportError("loopback: cannot connect to the bus at '" + path + "' (" + errno_text(error) + ")");
+    // No bus yet (the device process starts later): the same state as a bus that went away, so the
+    // host sees a disconnected link and connects by itself once the bus appears.
+    errors_ |= kDisconnected;
   }
 }
 
@@ -125,7 +129,7 @@ bool LoopbackTransport::reconnect() {
     ::close(fd);
     return false;
   }
-  ::close(fd_);
+  if (fd_ >= 0) ::close(fd_);
   fd_ = fd;
   errors_ &= ~kDisconnected;
   ++reconnects_;

@@ -87,4 +87,14 @@ std::unique_ptr<Device> open_device(const config::RigDevice& d) {
   }
 }
 
+std::string silent_device_hint(const config::RigDevice& d, const std::string& rig_file) {
+  const std::string what = "device '" + d.name + "' (" + config::to_string(d.transport.kind) + " " + d.transport.address +
+                           ") is not talking";
+  if (d.transport.kind != config::TransportKind::loopback) return what + ": is it powered and connected?";
+  const std::string start = rig_file.empty()
+                                ? "--transport loopback --address " + d.transport.address + " --framing " + d.transport.framing
+                                : "--rig " + rig_file + " --device " + d.name;
+  return what + ": no bus there yet; start haptic-fake-device " + start;
+}
+
 }  // namespace hapfluid::device

@@ -3,6 +3,8 @@ every framing: what haptic-rt will see on a rig. Rates, latencies and watchdog t
 checked with margins that hold on a loaded 2-core CI machine; the bench reports the real numbers.
 """
 import csv
+import json
+import time
 
 import pytest
 
@@ -307,3 +309,40 @@ def test_unknown_scene_device_is_named(programs, tmp_path):
     result = subprocess.run([str(fake), "--address", str(tmp_path / "b.sock"), "--motion", f"scene:{scene}:left"],
                             capture_output=True, text=True, timeout=10)
     assert result.returncode == 2 and "no device named 'left'" in result.stderr
+
+
+def test_the_log_stamps_every_state_sent_and_command_taken_on_the_machines_clock(programs, tmp_path):
+    # The log is one end of the motion-to-force chain (scripts/motion_to_force_latency.py): each
+    # tick on CLOCK_MONOTONIC (the clock of the loop's trace and the sim's publish_ns), the STATE
+    # it sampled and sent, and when it took commands off the link (after the drain, so never
+    # before the host sent them).
+    fake, prober = programs
+    sock, log = tmp_path / "bus.sock", tmp_path / "device.csv"
+    begin_ns = time.monotonic_ns()
+    with FakeDevice(fake, sock, "--log", log, "--drop-probability", 0.1, *RELAXED_WATCHDOG, duration=1.2) as dev:
+        probe(prober, sock, "--duration", 0.8, "--force", "1,0,0", "--enable")
+        summary = dev.finish()
+    end_ns = time.monotonic_ns()
+    rows = list(csv.DictReader(open(log)))
+    tick_ns = [int(r["tick_ns"]) for r in rows]
+    assert begin_ns < tick_ns[0] and tick_ns[-1] < end_ns
+    # t_s is the same instant on the device's own timeline (printed to 1 us)
+    offsets = [t - round(float(r["t_s"]) * 1e9) for t, r in zip(tick_ns, rows)]
+    assert max(offsets) - min(offsets) <= 2_000
+    assert all(int(r["rx_ns"]) >= t for t, r in zip(tick_ns, rows))
+    sent = [int(r["state_seq"]) for r in rows if r["state_seq"] != "-1"]
+    assert len(sent) == summary["states_sent"] and len(rows) - len(sent) == summary["states_dropped"] > 0
+    assert sent == sorted(sent) and len(set(sent)) == len(sent), "one STATE per tick, numbered in order"
+    assert sum(r["cmd_received"] == "1" for r in rows) > 500
+
+
+def test_a_host_without_its_device_waits_and_says_what_to_start(programs, tmp_path):
+    # No fake device on the bus yet: the host opens anyway (it may come up first), sees nothing,
+    # and names the command that starts the device.
+    _, prober = programs
+    sock = tmp_path / "nobody.sock"
+    result = probe(prober, sock, "--duration", 0.2, check=False)
+    assert result.returncode == 0, result.stderr
+    assert "is not talking" in result.stderr and f"haptic-fake-device --transport loopback --address {sock}" in result.stderr
+    report = json.loads(result.stdout)
+    assert report["states"] == 0 and report["connected"] is False

@@ -172,13 +172,33 @@ TEST(LoopbackBus, RelaysHostFramesToAMonitorAndReportsBusOff) {
   EXPECT_FALSE(host.error_flags() & device::kBusOff) << "a restarted controller clears bus-off";
 }
 
-TEST(LoopbackBus, APeerWithoutABusFailsWithAMessageThatSaysWhatToStart) {
+TEST(LoopbackBus, APeerStartedBeforeItsBusIsDisconnectedUntilTheBusAppears) {
+  // The host may come up first (a device powered on later, a fake device restarted last): its
+  // link reports kDisconnected, without blocking, and connects by itself once the bus is there.
+  const std::string path = socket_path("later");
+  ::unlink(path.c_str());
+  device::LoopbackTransport host(path, device::LoopbackRole::peer, device::LoopbackFormat::bulk);
+  EXPECT_TRUE(host.error_flags() & device::kDisconnected);
+  device::WireFrame f;
+  f.length = 6;
+  EXPECT_EQ(host.send(f), device::Io::error);
+  device::LoopbackTransport bus(path, device::LoopbackRole::bus, device::LoopbackFormat::bulk);
+  ::usleep(110'000);  // reconnection attempts are at most every 100 ms
+  EXPECT_EQ(host.send(f), device::Io::ok);
+  EXPECT_FALSE(host.error_flags() & device::kDisconnected);
+  EXPECT_EQ(host.reconnects(), 1u) << "the driver restarts its sequence tracking on it";
+  device::WireFrame got;
+  for (int i = 0; i < 100 && bus.receive(got) != device::Io::ok; ++i) ::usleep(1000);
+  EXPECT_EQ(got.length, 6u) << "the frame reached the bus";
+}
+
+TEST(LoopbackBus, APeerWhoseBusPathIsUnusableFailsNamingIt) {
   try {
-    device::LoopbackTransport peer("/tmp/hapfluid-no-such-bus.sock", device::LoopbackRole::peer,
+    device::LoopbackTransport peer("/dev/null/bus.sock", device::LoopbackRole::peer,
                                    device::LoopbackFormat::can);
-    FAIL() << "opened a peer without a bus";
+    FAIL() << "opened a peer on an impossible path";
   } catch (const device::TransportError& e) {
-    EXPECT_NE(std::string(e.what()).find("haptic-fake-device"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/dev/null/bus.sock"), std::string::npos) << e.what();
   }
 }
 

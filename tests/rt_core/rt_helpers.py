@@ -14,6 +14,7 @@ LOOP_NO_MLOCK = 1 << 1
 # safety::Flag / Fault bits (rt_core/include/hapfluid/safety/flags.hpp)
 FLAG_NONFINITE = 1 << 0
 FAULT_ESTOP = 1 << 0
+FAULT_LINK_TIMEOUT = 1 << 1
 FAULT_SIM_STALE = 1 << 4
 
 

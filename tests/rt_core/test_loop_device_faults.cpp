@@ -2,11 +2,11 @@
 // reaction to the host's own silence, e.g. a link loss longer than device_watchdog_ms) is cleared
 // once frames flow again, always with enable off; every other fault stays latched (issue 8).
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/loop.hpp"
 #include "hapfluid/wire/codec.h"
+#include "loop_test_rig.hpp"
 
 using namespace hapfluid;
 
@@ -43,16 +43,7 @@ struct LoopWithOneDevice {
   std::unique_ptr<rt::RtLoop> loop;
   std::uint64_t now = 1'000'000'000;
   LoopWithOneDevice() {
-    config::Rig rig = config::parse_rig(R"(
-[rt]
-trace_ring_records = 1024
-[[devices]]
-name = "arm"
-[devices.transport]
-kind = "loopback"
-address = "/tmp/unused"
-)", "device-faults-test.toml");
-    rig.rt.shm.prefix = "hapfluid-devfault-" + std::to_string(::getpid());
+    config::Rig rig = rt_test::one_device_rig("arm", "device-faults-test");
     auto d = std::make_unique<FaultyDevice>();
     device = d.get();
     std::vector<std::unique_ptr<device::Device>> devices;

@@ -13,6 +13,7 @@
 #include "hapfluid/rt/loop.hpp"
 #include "hapfluid/rt/rt_setup.hpp"
 #include "hapfluid/rt/simulated_device.hpp"
+#include "loop_test_rig.hpp"
 
 using namespace hapfluid;
 
@@ -40,16 +41,7 @@ class SlowDevice final : public device::Device {
 }  // namespace
 
 TEST(LoopTiming, OverrunsAreCountedAndTheLoopRephasesInsteadOfBursting) {
-  config::Rig rig = config::parse_rig(R"(
-[rt]
-trace_ring_records = 1024
-[[devices]]
-name = "slow"
-[devices.transport]
-kind = "loopback"
-address = "/tmp/unused"
-)", "timing-test.toml");
-  rig.rt.shm.prefix = "hapfluid-timing-" + std::to_string(::getpid());
+  config::Rig rig = rt_test::one_device_rig("slow", "timing-test");
   std::vector<std::unique_ptr<device::Device>> devices;
   devices.push_back(std::make_unique<SlowDevice>());
   rt::RtLoop loop(rig, std::move(devices));

@@ -168,9 +168,13 @@ TEST(ShmChannel, DeadWriterIsDetectedAndItsLeftoverSegmentReplaced) {
   EXPECT_EQ(reader.status(monotonic_ns(), 50'000'000), WriterStatus::stale);
   EXPECT_EQ(reader.check_liveness(monotonic_ns(), 50'000'000), WriterStatus::dead);
 
-  // Restart: a new writer replaces the leftover; the old mapping reports it, a re-attach sees the
-  // new incarnation and its data.
+  // Restart: a new writer replaces the leftover, and says so (a crashed predecessor is never
+  // silent); the old mapping reports it, a re-attach sees the new incarnation and its data.
+  testing::internal::CaptureStderr();
   auto restarted = LatestWriter::create(name, ChannelKind::sim_samples, sizeof(Sample));
+  const std::string said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find("shm " + name + ": replacing the segment left by pid " + std::to_string(child)), std::string::npos)
+      << said;
   restarted.publish(Sample{99, {}});
   EXPECT_EQ(reader.check_liveness(monotonic_ns(), 50'000'000), WriterStatus::replaced);
   auto fresh = LatestReader::attach(name, ChannelKind::sim_samples, sizeof(Sample));

@@ -188,6 +188,8 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   }
   t.link_miss_run = d.link.miss_run;
   t.fresh = d.fresh ? 1 : 0;
+  t.state_sequence = d.state.sequence;
+  t.state_receive_ns = d.state.host_receive_ns;
 }
 
 void RtLoop::tick(std::uint64_t scheduled_ns, std::uint64_t wake_ns) {
@@ -228,6 +230,8 @@ void RtLoop::tick(std::uint64_t scheduled_ns, std::uint64_t wake_ns) {
   std::uint64_t send_start = now_ns();
   for (auto& d : devices_) d->device->send(d->command);
   std::uint64_t send_end = now_ns();
+  for (std::size_t i = 0; i < devices_.size(); ++i)
+    last_trace_.devices[i].command_sequence = devices_[i]->device->health().last_command_sequence;
   io_ns += send_end - send_start;
 
   publish(tick, scheduled_ns);
@@ -245,6 +249,9 @@ void RtLoop::tick(std::uint64_t scheduled_ns, std::uint64_t wake_ns) {
   t.scheduled_ns = scheduled_ns;
   t.wake_ns = wake_ns;
   t.sim_age_ns = have_sample_ ? std::int64_t(now) - std::int64_t(sample_.publish_ns) : -1;
+  t.sim_device_tick = have_sample_ ? sample_.device_tick : 0;
+  t.sim_publish_ns = have_sample_ ? sample_.publish_ns : 0;
+  t.send_ns = send_start;
   t.io_ns = static_cast<std::uint32_t>(io_ns);
   t.compute_ns = static_cast<std::uint32_t>(now_ns() - wake_ns - io_ns);
   t.loop_flags = loop_flags;

@@ -67,6 +67,7 @@ bool SimulatedDevice::send(const device::DeviceCommand& command) {
     force_n_[i] = command.enable && !command.estop ? command.force_n[i] : 0.0;
     torque_nm_[i] = command.enable && !command.estop ? command.torque_nm[i] : 0.0;
   }
+  health_.last_command_sequence = static_cast<std::uint16_t>(health_.commands_sent);  // as a wire counter
   ++health_.commands_sent;
   return true;
 }

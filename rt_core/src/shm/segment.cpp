@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <new>
 #include <utility>
@@ -83,9 +84,13 @@ void check_existing_owner(const std::string& name) {
     }
   }
   ::close(fd);
-  if (owner != 0 && owner != ::getpid() && !closed && pid_alive(owner))
+  if (owner == 0 || owner == ::getpid() || closed) return;
+  if (pid_alive(owner))
     throw ShmError("shm " + name + ": already written by running process pid " + std::to_string(owner) +
                    ": a channel has exactly one writer; stop that process or use another rt.shm.prefix");
+  // Said once at start-up, so a crashed predecessor is never silent (its readers re-attach).
+  std::fprintf(stderr, "shm %s: replacing the segment left by pid %d, which is no longer running\n", name.c_str(),
+               int(owner));
 }
 
 }  // namespace

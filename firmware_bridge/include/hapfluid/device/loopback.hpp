@@ -22,7 +22,8 @@ enum class LoopbackFormat { can, hid, bulk };  // how datagrams map to WireFrame
 class LoopbackTransport final : public Transport {
  public:
   // bus: binds `path` (replacing a stale socket file) and accepts peers. peer: connects to the
-  // bus at `path`; after the bus goes away it reconnects by itself (at most every 100 ms).
+  // bus at `path`; while there is none (not started yet, or gone away) it reports kDisconnected
+  // and connects by itself when the bus appears (tries at most every 100 ms).
   LoopbackTransport(const std::string& path, LoopbackRole role, LoopbackFormat format);
   ~LoopbackTransport() override;
 

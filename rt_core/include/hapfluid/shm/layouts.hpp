@@ -17,7 +17,7 @@
 
 namespace hapfluid::shm {
 
-inline constexpr std::uint32_t kAbiVersion = 1;
+inline constexpr std::uint32_t kAbiVersion = 2;
 inline constexpr int kMaxDevices = 4;
 inline constexpr int kMaxBodies = 16;
 inline constexpr int kDeviceNameBytes = 32;
@@ -130,6 +130,14 @@ struct TraceDevice {
   float torque_nm[3];
   std::uint32_t link_miss_run;     // consecutive ticks without a fresh valid frame
   std::uint32_t fresh;             // 1: a fresh valid frame arrived this tick
+  // Wire sequence numbers (protocol.md §3; classic CAN carries their low 8 bits) of the STATE
+  // frame whose pose this tick used and of the COMMAND this tick sent, and when that frame
+  // arrived. With the fake device's log they tie a pose sample and a command to this tick
+  // (scripts/motion_to_force_latency.py).
+  std::uint16_t state_sequence;
+  std::uint16_t command_sequence;
+  std::uint32_t reserved;
+  std::uint64_t state_receive_ns;  // DeviceState::host_receive_ns of that frame
 };
 
 struct TraceRecord {
@@ -137,6 +145,9 @@ struct TraceRecord {
   std::uint64_t scheduled_ns;      // absolute wake time the loop asked for
   std::uint64_t wake_ns;           // when it actually woke
   std::int64_t sim_age_ns;         // now - publish time of the newest sim sample; -1: none
+  std::uint64_t sim_device_tick;   // device_states tick the newest sim sample was computed from; 0: none
+  std::uint64_t sim_publish_ns;    // that sample's publish_ns; 0: none
+  std::uint64_t send_ns;           // when this tick's commands began to leave (after the sim read and rendering)
   std::uint32_t compute_ns;        // loop work excluding device I/O
   std::uint32_t io_ns;             // device poll + send
   std::uint32_t loop_flags;        // rt::LoopFlag bits
@@ -152,8 +163,8 @@ template <class T>
 inline constexpr bool kPlainRecord = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T>;
 static_assert(kPlainRecord<DeviceStatesRecord> && kPlainRecord<SimSample> && kPlainRecord<ParticleFrameHeader> &&
               kPlainRecord<ParticleRecord> && kPlainRecord<TraceRecord>);
-static_assert(kAbiVersion == 1 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2472 &&
-                  sizeof(ParticleFrameHeader) == 936 && sizeof(ParticleRecord) == 16 && sizeof(TraceRecord) == 216,
+static_assert(kAbiVersion == 2 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2472 &&
+                  sizeof(ParticleFrameHeader) == 936 && sizeof(ParticleRecord) == 16 && sizeof(TraceRecord) == 304,
               "shm layout changed: bump kAbiVersion and update these sizes");
 
 }  // namespace hapfluid::shm
