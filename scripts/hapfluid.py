@@ -198,13 +198,18 @@ class Stack:
         self.procs = []  # (name, Popen, log file)
         self.started_at = {}
 
-    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0):
+    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0, cpus=None):
         log = open(self.out / "logs" / f"{name}.log", "w")
-        preexec = (lambda: try_nice(nice)) if nice else None
+
+        def preexec():
+            if nice:
+                try_nice(nice)
+            if cpus:
+                os.sched_setaffinity(0, cpus)
         if fifo_priority and can_use_fifo(fifo_priority):
             args = ["chrt", "-f", str(fifo_priority)] + list(args)
         p = subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE if stdout_pipe else log,
-                             stderr=log, text=True, preexec_fn=preexec)
+                             stderr=log, text=True, preexec_fn=preexec if nice or cpus else None)
         self.procs.append((name, p, log))
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         return p
@@ -275,6 +280,21 @@ def cyclictest_placement(rt: dict) -> int:
     return rt["cpu"]
 
 
+def cpu_placement(rt: dict) -> tuple[set, set]:
+    """(CPUs of the fake devices, CPUs of the sim, trace and renderer) beside a loop on rt["cpu"].
+
+    As on a rig (scripts/systemd: haptic-rt alone on its core, the other services off it): the
+    sim, the trace logger and the renderer stay off the loop's CPU. The fake devices stand in for
+    hardware outside the host and go beside the loop, whose CPU is idle but for ~2% of loop work
+    (they run below its priority): unpinned, their 1 kHz FIFO ticks preempted the sim on the
+    other CPU. Empty sets (no pinning) when the loop is not pinned or there is a single CPU."""
+    cpus = os.sched_getaffinity(0)
+    loop = rt.get("cpu", -1)
+    if loop < 0 or loop not in cpus or len(cpus) < 2:
+        return set(), set()
+    return {loop}, cpus - {loop}
+
+
 def read_device_log(path: pathlib.Path):
     """Rows of the fake device's --log CSV as floats."""
     with path.open(newline="") as f:
@@ -334,6 +354,7 @@ def run_live(args, scene_path, out, bin_dir):
     device_logs = {}
     device_scene_path = device_scene(scene_path, out, args.lead_in, offsets)
     started = time.monotonic()
+    device_cpus, service_cpus = cpu_placement(latency_report.read_rig_rt(rig_path))
     try:
         for dev in rig.get("devices", []):
             name = dev["name"]
@@ -343,7 +364,7 @@ def run_live(args, scene_path, out, bin_dir):
             p = stack.start(f"haptic-fake-device-{name}",
                             [bin_dir / "haptic-fake-device", "--rig", rig_path, "--device", name, "--motion", motion,
                              "--log", device_logs[name], "--summary", out / "logs" / f"device_{name}_summary.json"],
-                            stdout_pipe=True, fifo_priority=70)
+                            stdout_pipe=True, fifo_priority=70, cpus=device_cpus)
             line = p.stdout.readline()  # "haptic-fake-device: ready on ..."
             if "ready" not in line:
                 raise RuntimeError(f"haptic-fake-device for '{name}' did not start: {line.strip()}")
@@ -356,12 +377,12 @@ def run_live(args, scene_path, out, bin_dir):
         time.sleep(0.5)
         cyclictest = start_cyclictest_beside(args, rig_path, out)
         stack.start("haptic-trace", [bin_dir / "haptic-trace", "--out", out / "trace.csv", "--shm-prefix", prefix,
-                                     "--wait", "10"])
+                                     "--wait", "10"], cpus=service_cpus)
         sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
                                          "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
                                          "--threads", str(args.sim_threads), "--backend", args.backend,
                                          "--export-every", str(args.export_every)],
-                          nice=-5)  # feeds the haptic loop: ahead of builds and the renderer
+                          nice=-5, cpus=service_cpus)  # feeds the haptic loop: ahead of builds and the renderer
         if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
             raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
         if not args.no_render and not (bin_dir / "haptic-render").exists():
@@ -373,7 +394,7 @@ def run_live(args, scene_path, out, bin_dir):
             # It ends by itself (it has no SIGINT handler to save a last frame cleanly).
             render += ["--duration", f"{max(1.0, duration - (time.monotonic() - started)):.2f}"]
             # The renderer (lavapipe: CPU rasterisation) yields the CPU to the loop and the sim.
-            stack.start("haptic-render", render, nice=10)
+            stack.start("haptic-render", render, nice=10, cpus=service_cpus)
         deadline = started + duration
         while time.monotonic() < deadline:
             dead = stack.early_exits()
