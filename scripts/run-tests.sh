@@ -8,6 +8,10 @@ build="${1:-build}"
 case "$build" in /*) ;; *) build="$here/$build" ;; esac
 cd "$here"
 
+# Every test stops its writers cleanly: a segment a test leaves in /dev/shm is a failure (a live
+# run's processes must leave nothing behind either, issue 8).
+shm_before="$(ls /dev/shm 2>/dev/null | grep '^hapfluid' | sort)"
+
 echo "== C/C++ tests (ctest) =="
 # One test at a time: several suites check real-time behaviour (1 kHz loops, watchdogs) across
 # processes, and a neighbour test saturating the other core would only measure the machine.
@@ -22,5 +26,13 @@ if [ "$py_rc" -eq 5 ]; then
   py_rc=0
 fi
 
-echo "== summary: ctest exit $ctest_rc, pytest exit $py_rc =="
-[ "$ctest_rc" -eq 0 ] && [ "$py_rc" -eq 0 ]
+shm_left="$(comm -13 <(echo "$shm_before") <(ls /dev/shm 2>/dev/null | grep '^hapfluid' | sort))"
+shm_rc=0
+if [ -n "$shm_left" ]; then
+  echo "== shared memory left in /dev/shm by the tests (a writer not closed): =="
+  echo "$shm_left"
+  shm_rc=1
+fi
+
+echo "== summary: ctest exit $ctest_rc, pytest exit $py_rc, leftover segments $(echo -n "$shm_left" | grep -c .) =="
+[ "$ctest_rc" -eq 0 ] && [ "$py_rc" -eq 0 ] && [ "$shm_rc" -eq 0 ]

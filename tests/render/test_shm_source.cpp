@@ -30,6 +30,11 @@ struct SimWriter {
     writer = shm::LatestWriter::create(shm::segment_name(prefix, shm::ChannelKind::particles), shm::ChannelKind::particles,
                                        frame.size());
   }
+  // A writer that goes away without close() leaves its segment as a crashed simulator would
+  // (channel.hpp): the tests' writers stop cleanly and leave nothing in /dev/shm.
+  ~SimWriter() { writer.close(); }
+  SimWriter(const SimWriter&) = delete;
+  SimWriter& operator=(const SimWriter&) = delete;
   void publish(std::uint64_t sequence, std::uint32_t count, float x_offset) {
     shm::ParticleFrameHeader h{};
     h.sequence = sequence;
@@ -121,4 +126,5 @@ TEST(ShmSource, RefusesASegmentThatIsNotParticleFrames) {
   ShmSource source(one_body_scene(), fast_options(prefix));
   Frame frame;
   EXPECT_EQ(source.next_frame(frame), FrameStatus::unchanged);
+  writer.close();
 }
