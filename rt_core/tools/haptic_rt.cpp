@@ -121,7 +121,7 @@ int main(int argc, char** argv) {
     if (args.simulated) std::fprintf(stderr, "haptic-rt: device \"%s\": SIMULATED handle (no hardware)\n", d.name.c_str());
     else if (!device->health().connected)
       std::fprintf(stderr, "haptic-rt: %s; meanwhile the loop holds it at a link fault with zero wrench\n",
-                   rt::silent_device_hint(d, args.rig).c_str());
+                   rt::silent_device_hint(d, device->health(), args.rig).c_str());
     devices.push_back(std::move(device));
   }
 
