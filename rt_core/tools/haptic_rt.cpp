@@ -2,7 +2,8 @@
 //   haptic-rt --rig FILE [--duration S] [--simulated-devices] [--trace FILE]
 //             [--flight-dir DIR] [--shm-prefix NAME]
 // Signals: SIGINT/SIGTERM stop cleanly; SIGUSR1 latches the e-stop; SIGUSR2 resets it.
-// Exit codes: 0 ok, 2 bad arguments/config/device/shm, 3 refused by rt.policy = enforce.
+// Exit codes: 0 ok, 2 bad arguments/config/shm or a device that can never open as configured (one
+// that is not there yet is waited for at a link fault), 3 refused by rt.policy = enforce.
 #include <signal.h>
 #include <sys/syscall.h>
 #include <unistd.h>

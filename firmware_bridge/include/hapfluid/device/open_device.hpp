@@ -1,5 +1,7 @@
 // The factory the 1 kHz loop calls once per rig device at start-up (not real-time: it may block
 // for the device handshake, allocate and throw TransportError with a message naming the fix).
+// A device that is not there yet is no error: it opens disconnected and is taken up when it
+// appears; only a rig that can never work as configured throws (open_failure.hpp).
 #pragma once
 
 #include <memory>
