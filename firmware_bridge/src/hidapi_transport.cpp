@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <hidapi/hidapi.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -54,6 +55,35 @@ std::string find_hid(std::uint16_t vendor, std::uint16_t product) {
   return path;
 }
 
+// Whether the character device `node` is a hidraw node: its sysfs entry's subsystem is hidraw
+// (whatever the /dev name, e.g. a udev symlink).
+bool is_hidraw(dev_t node) {
+  char link[64];
+  std::snprintf(link, sizeof link, "/sys/dev/char/%u:%u/subsystem", major(node), minor(node));
+  char target[256];
+  const ssize_t n = ::readlink(link, target, sizeof target - 1);
+  if (n <= 0) return false;
+  target[n] = 0;
+  const char* base = std::strrchr(target, '/');
+  return base && std::strcmp(base + 1, "hidraw") == 0;
+}
+
+// A /dev address, checked before hidapi sees it: hid_open_path (hidapi 0.13) frees an unset
+// pointer and crashes when the node is not hidraw (/dev/null did, in
+// tests/firmware_bridge/test_transport_errors.cpp). False with `attempt` saying why.
+bool check_hidraw_path(const std::string& path, OpenAttempt& attempt) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int error = errno;  // ENOENT: not created yet (the device enumerates later)
+    attempt = {classify_errno(error), "hidapi: " + path + ": " + std::strerror(error)};
+    return false;
+  }
+  if (S_ISCHR(st.st_mode) && is_hidraw(st.st_rdev)) return true;
+  attempt = {OpenFailure::permanent,
+             "'" + path + "' is not a hidraw node: fix transport.address in the rig file (\"vid:pid\" or /dev/hidrawN)"};
+  return false;
+}
+
 // Opens the address non-blocking; nullptr with `attempt` saying why. `vendor`/`product` are the
 // parsed address unless it is a /dev path.
 hid_device* open_hid(const std::string& address, std::uint16_t vendor, std::uint16_t product, OpenAttempt& attempt) {
@@ -63,6 +93,7 @@ hid_device* open_hid(const std::string& address, std::uint16_t vendor, std::uint
     return nullptr;
   }
   const bool by_path = address.rfind("/dev/", 0) == 0;
+  if (by_path && !check_hidraw_path(address, attempt)) return nullptr;
   const std::string path = by_path ? address : find_hid(vendor, product);
   if (path.empty()) {
     attempt = {OpenFailure::absent, "no HID device " + address + " is connected"};

@@ -94,6 +94,21 @@ TEST(TransportErrors, AnAbsentHidDeviceIsWaitedForUnlessTheMachineHasNoHid) {
   open_absent(d, "not available on this machine");
 }
 
+TEST(TransportErrors, AHidrawPathIsWaitedForUntilItExistsButANodeThatIsNotHidrawIsRefused) {
+  // A rig may name the node itself: one not created yet is an absent device (ENOENT); a node
+  // that is not hidraw is the rig file's mistake and must stop haptic-rt (hidapi 0.13 crashed
+  // on /dev/null).
+  config::RigDevice d;
+  d.name = "left";
+  d.transport.kind = config::TransportKind::hid;
+  d.transport.address = "/dev/hidraw-hapfluid-not-created";
+  open_absent(d, "not available on this machine");
+  d.transport.address = "/dev/null";
+  const std::string m = open_error(d);
+  EXPECT_TRUE(contains(m, "device 'left'")) << m;
+  EXPECT_TRUE(contains(m, "'/dev/null' is not a hidraw node") || contains(m, "not available on this machine")) << m;
+}
+
 TEST(TransportErrors, AnAbsentUsbBulkDeviceIsWaitedForUnlessTheMachineHasNoUsbHost) {
   config::RigDevice d;
   d.name = "arm";

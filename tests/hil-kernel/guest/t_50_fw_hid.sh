@@ -7,8 +7,8 @@
 # up by itself: states, commands applied. Then the device is unplugged (the fake device exits, its
 # uhid device and /dev/hidraw node vanish): the driver must report it, and once a restarted device
 # is there the same driver must recover by itself (haptic-rt opens its devices once). Last, a
-# device present at open: the device watchdog. The driver is always addressed as a rig addresses
-# it, by VID:PID (`1209:4846`), never by its /dev/hidrawN node.
+# device present at open: the device watchdog. The driver is addressed as a rig addresses it, by
+# VID:PID (`1209:4846`); a last short check opens it by its /dev/hidrawN node.
 set -eu
 . "$HIL_GUEST/lib.sh"
 fake_args="--transport hid --address 1209:4846 --motion pour --watchdog-ms $HIL_WATCHDOG_MS"
@@ -29,6 +29,10 @@ echo "uhid device: $node ($(grep -E 'HID_NAME|HID_ID' /sys/class/hidraw/${node#/
 check_hidapi_lists 1209 4846
 device_check --transport hid --address 1209:4846 --force-n 0.8 --expect watchdog \
     || { cat fake2.out; fail "watchdog over hidapi"; }
+# A rig may also name the node itself (transport.address = "/dev/hidrawN"): the driver checks it
+# is a hidraw node before hidapi opens it (hidapi 0.13 crashes on one that is not).
+device_check --transport hid --address "$node" --states 50 --command-s 0.2 \
+    || { cat fake2.out; fail "the driver addressed by its hidraw node $node"; }
 stop_pid "$(cat fake.pid)" "haptic-fake-device (hid)"
 cat fake.out fake2.out
 pass "fake arm over uhid/hidraw <-> hidapi driver: absent at open and taken up when created, states, commands, watchdog, unplug reported, recovered after replug"
