@@ -28,6 +28,14 @@ std::string open_error(const config::RigDevice& d) {
 
 bool contains(const std::string& text, const char* part) { return text.find(part) != std::string::npos; }
 
+config::RigDevice rig_device(const char* name, config::TransportKind kind, const char* address) {
+  config::RigDevice d;
+  d.name = name;
+  d.transport.kind = kind;
+  d.transport.address = address;
+  return d;
+}
+
 // Opens `d`, which is not attached. Either the machine cannot have such a device at all (the
 // error must contain `unavailable`) or the device opens disconnected and the start-up hint says
 // it is waited for (returned for more checks; empty when it threw).
@@ -58,10 +66,7 @@ std::string open_absent(const config::RigDevice& d, const char* unavailable) {
 }
 
 TEST(TransportErrors, AMissingCanInterfaceIsWaitedForUnlessTheKernelHasNoSocketCan) {
-  config::RigDevice d;
-  d.name = "left";
-  d.transport.kind = config::TransportKind::socketcan;
-  d.transport.address = "hfnope0";
+  config::RigDevice d = rig_device("left", config::TransportKind::socketcan, "hfnope0");
   const std::string hint = open_absent(d, "SocketCAN is not available in this kernel (");
   if (!hint.empty()) {
     EXPECT_TRUE(contains(hint, "no CAN interface 'hfnope0' up yet")) << hint;
@@ -71,19 +76,14 @@ TEST(TransportErrors, AMissingCanInterfaceIsWaitedForUnlessTheKernelHasNoSocketC
 }
 
 TEST(TransportErrors, ACanInterfaceNameTheKernelCannotHaveIsRefused) {
-  config::RigDevice d;
-  d.name = "left";
-  d.transport.kind = config::TransportKind::socketcan;
-  d.transport.address = "a-name-longer-than-ifnamsiz";
+  config::RigDevice d = rig_device("left", config::TransportKind::socketcan, "a-name-longer-than-ifnamsiz");
   const std::string m = open_error(d);
   EXPECT_TRUE(contains(m, "device 'left'") && contains(m, "too long")) << m;
 }
 
 TEST(TransportErrors, AnAbsentHidDeviceIsWaitedForUnlessTheMachineHasNoHid) {
-  config::RigDevice d;
-  d.name = "left";
-  d.transport.kind = config::TransportKind::hid;
-  d.transport.address = "1209:4846";  // no hapfluid arm is attached in CI
+  // No hapfluid arm is attached in CI.
+  config::RigDevice d = rig_device("left", config::TransportKind::hid, "1209:4846");
   const std::string hint = open_absent(d, "not available on this machine");
   if (!hint.empty()) {
     EXPECT_EQ(hint, "device 'left' (hid 1209:4846) is not connected: waiting for it (is it powered and plugged in?)");
@@ -98,10 +98,7 @@ TEST(TransportErrors, AHidrawPathIsWaitedForUntilItExistsButANodeThatIsNotHidraw
   // A rig may name the node itself: one not created yet is an absent device (ENOENT); a node
   // that is not hidraw is the rig file's mistake and must stop haptic-rt (hidapi 0.13 crashed
   // on /dev/null).
-  config::RigDevice d;
-  d.name = "left";
-  d.transport.kind = config::TransportKind::hid;
-  d.transport.address = "/dev/hidraw-hapfluid-not-created";
+  config::RigDevice d = rig_device("left", config::TransportKind::hid, "/dev/hidraw-hapfluid-not-created");
   open_absent(d, "not available on this machine");
   d.transport.address = "/dev/null";
   const std::string m = open_error(d);
@@ -110,10 +107,7 @@ TEST(TransportErrors, AHidrawPathIsWaitedForUntilItExistsButANodeThatIsNotHidraw
 }
 
 TEST(TransportErrors, AnAbsentUsbBulkDeviceIsWaitedForUnlessTheMachineHasNoUsbHost) {
-  config::RigDevice d;
-  d.name = "arm";
-  d.transport.kind = config::TransportKind::usb_bulk;
-  d.transport.address = "1209:4846";
+  config::RigDevice d = rig_device("arm", config::TransportKind::usb_bulk, "1209:4846");
   open_absent(d, "exposes no USB");
   const std::string m = open_error(d);
   if (!m.empty()) {
@@ -133,10 +127,7 @@ TEST(TransportErrors, MalformedAddressesAreNamed) {
   device::parse_vid_pid("1209:4846", v, p);
   EXPECT_EQ(v, 0x1209);
   EXPECT_EQ(p, 0x4846);
-  config::RigDevice d;
-  d.name = "arm";
-  d.transport.kind = config::TransportKind::loopback;
-  d.transport.address = "/tmp/x.sock";
+  config::RigDevice d = rig_device("arm", config::TransportKind::loopback, "/tmp/x.sock");
   d.transport.framing = "serial";
   EXPECT_TRUE(contains(open_error(d), "framing 'serial'"));
   d.transport.framing = "can";
@@ -146,11 +137,8 @@ TEST(TransportErrors, MalformedAddressesAreNamed) {
 }
 
 TEST(TransportErrors, ASpaceMouseOnACanBusIsRefused) {
-  config::RigDevice d;
-  d.name = "mouse";
+  config::RigDevice d = rig_device("mouse", config::TransportKind::socketcan, "can0");
   d.kind = config::DeviceKind::spacemouse;
-  d.transport.kind = config::TransportKind::socketcan;
-  d.transport.address = "can0";
   EXPECT_TRUE(contains(open_error(d), "SpaceMouse speaks USB HID"));
 }
 
