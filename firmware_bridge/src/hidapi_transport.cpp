@@ -1,10 +1,14 @@
-// HID transport over hidapi's hidraw backend: 64-byte reports, non-blocking reads. An unplugged
-// device is reported as kDisconnected and reopened by its address (VID:PID or hidraw path) every
-// 200 ms by a ReopenWorker thread, so the same driver recovers after a replug without the loop
-// blocking on hid_open.
+// HID transport over hidapi's hidraw backend: 64-byte reports, non-blocking reads. A device that
+// is not there (absent at open, or unplugged later) is reported as kDisconnected and opened by its
+// address (VID:PID or hidraw path) every 200 ms by a ReopenWorker thread, so the same driver
+// takes it up when it appears without the loop blocking on hid_open.
+#include <fcntl.h>
 #include <hidapi/hidapi.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <cwchar>
@@ -43,42 +47,102 @@ void close_hid(hid_device* device) {
   hid_close(device);
 }
 
-// Opens the address non-blocking; nullptr if no such device is there.
-hid_device* open_hid(const std::string& address) {
-  std::lock_guard<std::mutex> lock(g_hidapi_global);
-  if (hid_init() != 0) return nullptr;
-  hid_device* device = nullptr;
-  if (address.rfind("/dev/", 0) == 0) {
-    device = hid_open_path(address.c_str());
-  } else {
-    std::uint16_t vendor = 0, product = 0;
-    parse_vid_pid(address, vendor, product);
-    device = hid_open(vendor, product, nullptr);
+// The hidraw node of the first HID device VID:PID hidapi lists, or "" when none is there.
+std::string find_hid(std::uint16_t vendor, std::uint16_t product) {
+  hid_device_info* list = hid_enumerate(vendor, product);
+  std::string path = list && list->path ? list->path : "";
+  hid_free_enumeration(list);
+  return path;
+}
+
+// Whether the character device `node` is a hidraw node: its sysfs entry's subsystem is hidraw
+// (whatever the /dev name, e.g. a udev symlink).
+bool is_hidraw(dev_t node) {
+  char link[64];
+  std::snprintf(link, sizeof link, "/sys/dev/char/%u:%u/subsystem", major(node), minor(node));
+  char target[256];
+  const ssize_t n = ::readlink(link, target, sizeof target - 1);
+  if (n <= 0) return false;
+  target[n] = 0;
+  const char* base = std::strrchr(target, '/');
+  return base && std::strcmp(base + 1, "hidraw") == 0;
+}
+
+// A /dev address, checked before hidapi sees it: hid_open_path (hidapi 0.13) frees an unset
+// pointer and crashes when the node is not hidraw (/dev/null did, in
+// tests/firmware_bridge/test_transport_errors.cpp). False with `attempt` saying why.
+bool check_hidraw_path(const std::string& path, OpenAttempt& attempt) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    const int error = errno;  // ENOENT: not created yet (the device enumerates later)
+    attempt = {classify_errno(error), "hidapi: " + path + ": " + std::strerror(error)};
+    return false;
   }
-  if (device) hid_set_nonblocking(device, 1);
-  return device;
+  if (S_ISCHR(st.st_mode) && is_hidraw(st.st_rdev)) return true;
+  attempt = {OpenFailure::permanent,
+             "'" + path + "' is not a hidraw node: fix transport.address in the rig file (\"vid:pid\" or /dev/hidrawN)"};
+  return false;
+}
+
+// Opens the address non-blocking; nullptr with `attempt` saying why. `vendor`/`product` are the
+// parsed address unless it is a /dev path.
+hid_device* open_hid(const std::string& address, std::uint16_t vendor, std::uint16_t product, OpenAttempt& attempt) {
+  std::lock_guard<std::mutex> lock(g_hidapi_global);
+  if (hid_init() != 0) {
+    attempt = {OpenFailure::permanent, "hidapi: hid_init failed: " + narrow(hid_error(nullptr))};
+    return nullptr;
+  }
+  const bool by_path = address.rfind("/dev/", 0) == 0;
+  if (by_path && !check_hidraw_path(address, attempt)) return nullptr;
+  const std::string path = by_path ? address : find_hid(vendor, product);
+  if (path.empty()) {
+    attempt = {OpenFailure::absent, "no HID device " + address + " is connected"};
+    return nullptr;
+  }
+  if (hid_device* device = hid_open_path(path.c_str())) {
+    hid_set_nonblocking(device, 1);
+    return device;
+  }
+  // hidapi keeps only a text; opening the node ourselves gives the errno that tells a node that
+  // is not (or no longer) there from one this process may not open (open_failure.hpp).
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  const int error = errno;
+  if (fd >= 0) {
+    ::close(fd);
+    attempt = {OpenFailure::permanent, "'" + path + "' opens but is not a HID device hidapi can use (" +
+                                           narrow(hid_error(nullptr)) + "): fix transport.address in the rig file"};
+    return nullptr;
+  }
+  attempt.failure = classify_errno(error);
+  attempt.why = "hidapi: HID device " + address + (by_path ? "" : " (" + path + ")") + " cannot be opened: " +
+                std::strerror(error) +
+                ": the udev rule firmware_bridge/udev/70-hapfluid.rules must give the hapfluid group access to "
+                "its /dev/hidraw node (docs/rig-setup.md, section 5)";
+  return nullptr;
+}
+
+// Where no HID device can ever appear, waiting for one would hide the cause. The HID core
+// registers /sys/class/hidraw when it loads, which on a rig may be only when the first HID device
+// (the arm itself) is plugged in, so a missing class alone proves nothing; with no USB bus either,
+// nothing will load it.
+bool machine_can_have_hid() {
+  struct stat st {};
+  return ::stat("/sys/class/hidraw", &st) == 0 || machine_has_usb();
 }
 
 class HidapiTransport final : public Transport {
  public:
   explicit HidapiTransport(const std::string& address)
-      : address_(address), reopen_([this] { return open_hid(address_); }, close_hid) {
-    {
-      std::lock_guard<std::mutex> lock(g_hidapi_global);
-      if (hid_init() != 0) throw TransportError("hidapi: hid_init failed: " + narrow(hid_error(nullptr)));
-    }
-    struct stat st {};
-    bool kernel_has_hidraw = ::stat("/sys/class/hidraw", &st) == 0;
-    device_ = open_hid(address);
-    if (!device_) {
-      std::lock_guard<std::mutex> lock(g_hidapi_global);  // hid_error(nullptr) reads the global error
-      if (!kernel_has_hidraw)
-        throw TransportError("USB HID (hidraw) is not available in this kernel (no /sys/class/hidraw): "
-                             "load hid, hidraw and uhid for tests, or use the loopback transport");
-      throw TransportError("hidapi: no HID device '" + address + "' could be opened (" +
-                           narrow(hid_error(nullptr)) + "): is it plugged in, and does the udev rule "
-                           "firmware_bridge/udev/70-hapfluid.rules give you access to its /dev/hidraw node?");
-    }
+      : address_(address),
+        reopen_(describe(), [this](OpenAttempt& a) { return open_hid(address_, vendor_, product_, a); }, close_hid) {
+    if (address.rfind("/dev/", 0) != 0) parse_vid_pid(address, vendor_, product_);
+    if (!machine_can_have_hid())
+      throw TransportError("USB HID (hidraw) is not available on this machine (no /sys/class/hidraw, no USB): "
+                           "load hid, hidraw and uhid for tests, or use the loopback transport");
+    OpenAttempt attempt;
+    device_ = reopen_.first_open(attempt);
+    if (!device_ && attempt.failure == OpenFailure::permanent) throw TransportError(attempt.why);
+    if (!device_) errors_ |= kDisconnected;  // a link fault until it is plugged in and the worker opens it
   }
   ~HidapiTransport() override {
     if (device_) close_hid(device_);
@@ -122,6 +186,7 @@ class HidapiTransport final : public Transport {
   }
 
   std::string address_;
+  std::uint16_t vendor_ = 0, product_ = 0;  // unless address_ is a /dev path
   hid_device* device_ = nullptr;
   std::uint32_t errors_ = 0;
   std::uint32_t reconnects_ = 0;

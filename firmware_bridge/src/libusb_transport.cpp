@@ -7,7 +7,8 @@
 // reported as kDisconnected and the driver recovers by itself: once the dead connection's
 // transfers have all returned, a ReopenWorker thread (it never touches a live connection)
 // disposes of it and opens the device again by VID:PID every 200 ms; service() adopts the new
-// connection with a single atomic exchange, so the loop never blocks on it.
+// connection with a single atomic exchange, so the loop never blocks on it. A device absent at
+// open starts the same way, as if it had just been unplugged.
 #include <libusb-1.0/libusb.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -79,37 +80,55 @@ void find_bulk_endpoints(Connection& c) {
   libusb_free_config_descriptor(config);
 }
 
-// Opens VID:PID and claims the bulk interface; throws TransportError naming the cause and fix.
+// The first device VID:PID on the context's bus, opened; LIBUSB_ERROR_NO_DEVICE when none is
+// there, else libusb_open's own error (which tells "no permission" from "gone meanwhile").
+int open_vid_pid(Connection& c, std::uint16_t vendor, std::uint16_t product) {
+  libusb_device** list = nullptr;
+  const ssize_t n = libusb_get_device_list(c.context, &list);
+  if (n < 0) return static_cast<int>(n);
+  int r = LIBUSB_ERROR_NO_DEVICE;
+  for (ssize_t i = 0; i < n; ++i) {
+    libusb_device_descriptor d{};
+    if (libusb_get_device_descriptor(list[i], &d) != 0 || d.idVendor != vendor || d.idProduct != product) continue;
+    r = libusb_open(list[i], &c.handle);
+    break;
+  }
+  libusb_free_device_list(list, 1);  // an opened device keeps its own reference
+  return r;
+}
+
+// nullptr with `attempt` filled in, `c` disposed of.
+Connection* refuse(Connection* c, OpenAttempt& attempt, OpenFailure failure, const std::string& why) {
+  dispose(c);
+  attempt = {failure, why};
+  return nullptr;
+}
+
+// Opens VID:PID and claims the bulk interface; nullptr with `attempt` naming the cause and fix.
 // Blocks and allocates: the constructor and the reconnect thread only.
-Connection* connect(std::uint16_t vendor, std::uint16_t product, const std::string& address) {
+Connection* connect(std::uint16_t vendor, std::uint16_t product, const std::string& address, OpenAttempt& attempt) {
   auto* c = new Connection;
   int r = libusb_init(&c->context);
   if (r != 0) {
+    // Permanent: libusb finds no usbfs, so this machine has no USB host for a device to appear on.
     c->context = nullptr;
-    dispose(c);
-    throw TransportError(std::string("libusb could not initialise (") + libusb_strerror(r) +
-                         "): this machine exposes no USB host (no /dev/bus/usb?); use the loopback transport");
+    return refuse(c, attempt, OpenFailure::permanent,
+                  std::string("libusb could not initialise (") + libusb_strerror(r) +
+                      "): this machine exposes no USB host (no /dev/bus/usb?); use the loopback transport");
   }
-  c->handle = libusb_open_device_with_vid_pid(c->context, vendor, product);
-  if (!c->handle) {
-    dispose(c);
-    struct stat st {};
-    std::string why = ::stat("/dev/bus/usb", &st) == 0
-                          ? "is it plugged in, and does the udev rule firmware_bridge/udev/70-hapfluid.rules "
-                            "give you access?"
-                          : "this kernel exposes no USB devices (no /dev/bus/usb); for tests load dummy_hcd "
-                            "and usb_f_fs, or use the loopback transport";
-    throw TransportError("libusb: no USB device " + address + " could be opened: " + why);
-  }
+  r = open_vid_pid(*c, vendor, product);
+  if (r != 0)
+    return refuse(c, attempt, classify_libusb_error(r),
+                  "libusb: USB device " + address + " cannot be opened (" + libusb_strerror(r) +
+                      "): the udev rule firmware_bridge/udev/70-hapfluid.rules must give the hapfluid group access "
+                      "(docs/rig-setup.md, section 5)");
   libusb_set_auto_detach_kernel_driver(c->handle, 1);
   r = libusb_claim_interface(c->handle, kBulkInterface);
-  if (r != 0) {
-    libusb_close(c->handle);
-    c->handle = nullptr;
-    dispose(c);
-    throw TransportError("libusb: cannot claim interface 0 of " + address + ": " + libusb_strerror(r) +
-                         " (another program holds it?)");
-  }
+  if (r != 0)
+    return refuse(c, attempt, classify_libusb_error(r),
+                  "libusb: cannot claim interface 0 of " + address + ": " + libusb_strerror(r) +
+                      (r == LIBUSB_ERROR_BUSY ? " (another program holds it: stop it)"
+                                              : " (is the address that of a hapfluid bulk device?)"));
   find_bulk_endpoints(*c);
   for (auto& t : c->in) t = libusb_alloc_transfer(0);
   for (auto& t : c->out) t = libusb_alloc_transfer(0);
@@ -120,19 +139,22 @@ class LibusbTransport final : public Transport {
  public:
   explicit LibusbTransport(const std::string& address)
       : address_(address),
-        reopen_([this]() -> Connection* {
-                  try {
-                    return connect(vendor_, product_, address_);
-                  } catch (const TransportError&) {
-                    return nullptr;  // not back yet
-                  }
-                },
-                dispose) {
+        reopen_(describe(), [this](OpenAttempt& a) { return connect(vendor_, product_, address_, a); }, dispose) {
     parse_vid_pid(address, vendor_, product_);
+    if (!machine_has_usb())
+      throw TransportError("libusb: this machine exposes no USB (no /sys/bus/usb), so USB device " + address +
+                           " can never appear: for tests load dummy_hcd and usb_f_fs, or use the loopback transport");
     for (int i = 0; i < Book::kIn; ++i) in_refs_[i] = {this, i};
     for (int i = 0; i < Book::kOut; ++i) out_refs_[i] = {this, i};
-    live_ = connect(vendor_, product_, address);
-    start_streaming();
+    OpenAttempt attempt;
+    live_ = reopen_.first_open(attempt);
+    if (!live_ && attempt.failure == OpenFailure::permanent) throw TransportError(attempt.why);
+    if (live_) {
+      start_streaming();
+    } else {  // a link fault until it is plugged in; service() adopts what the worker opens
+      book_.lose();
+      errors_ |= kDisconnected;
+    }
   }
 
   ~LibusbTransport() override {
@@ -291,6 +313,11 @@ class LibusbTransport final : public Transport {
 };
 
 }  // namespace
+
+bool machine_has_usb() {
+  struct stat st {};
+  return ::stat("/sys/bus/usb", &st) == 0;
+}
 
 std::unique_ptr<Transport> open_libusb_transport(const std::string& address) {
   return std::make_unique<LibusbTransport>(address);

@@ -87,14 +87,27 @@ std::unique_ptr<Device> open_device(const config::RigDevice& d) {
   }
 }
 
-std::string silent_device_hint(const config::RigDevice& d, const std::string& rig_file) {
-  const std::string what = "device '" + d.name + "' (" + config::to_string(d.transport.kind) + " " + d.transport.address +
-                           ") is not talking";
-  if (d.transport.kind != config::TransportKind::loopback) return what + ": is it powered and connected?";
-  const std::string start = rig_file.empty()
-                                ? "--transport loopback --address " + d.transport.address + " --framing " + d.transport.framing
-                                : "--rig " + rig_file + " --device " + d.name;
-  return what + ": no bus there yet; start haptic-fake-device " + start;
+std::string silent_device_hint(const config::RigDevice& d, const DeviceHealth& health, const std::string& rig_file) {
+  const std::string what = "device '" + d.name + "' (" + config::to_string(d.transport.kind) + " " + d.transport.address + ")";
+  const bool disconnected = health.transport_errors & kDisconnected;
+  switch (d.transport.kind) {
+    case config::TransportKind::loopback: {
+      const std::string start = rig_file.empty() ? "--transport loopback --address " + d.transport.address +
+                                                       " --framing " + d.transport.framing
+                                                 : "--rig " + rig_file + " --device " + d.name;
+      return what + " is not talking: no bus there yet; start haptic-fake-device " + start;
+    }
+    case config::TransportKind::socketcan:
+      if (disconnected)
+        return what + " is not connected: no CAN interface '" + d.transport.address + "' up yet: waiting for it " +
+               "(is the CAN adapter plugged in? configure it: docs/rig-setup.md, section 6)";
+      break;
+    case config::TransportKind::hid:
+    case config::TransportKind::usb_bulk:
+      if (disconnected) return what + " is not connected: waiting for it (is it powered and plugged in?)";
+      break;
+  }
+  return what + " is not talking: is it powered and connected?";
 }
 
 }  // namespace hapfluid::device

@@ -97,7 +97,7 @@ double percentile(std::vector<double> v, double p) {
 
 int run(const Options& o) {
   auto dev = device::open_device(o.device);
-  if (!dev->health().connected) std::fprintf(stderr, "haptic-device-probe: %s\n", device::silent_device_hint(o.device).c_str());
+  if (!dev->health().connected) std::fprintf(stderr, "haptic-device-probe: %s\n", device::silent_device_hint(o.device, dev->health()).c_str());
   auto* arm = dynamic_cast<device::HapticArm*>(dev.get());
   const std::size_t max_ticks = static_cast<std::size_t>(o.duration_s * 1000) + 16;
   std::vector<double> rtt_us;

@@ -2,7 +2,8 @@
 //   haptic-rt --rig FILE [--duration S] [--simulated-devices] [--trace FILE]
 //             [--flight-dir DIR] [--shm-prefix NAME]
 // Signals: SIGINT/SIGTERM stop cleanly; SIGUSR1 latches the e-stop; SIGUSR2 resets it.
-// Exit codes: 0 ok, 2 bad arguments/config/device/shm, 3 refused by rt.policy = enforce.
+// Exit codes: 0 ok, 2 bad arguments/config/shm or a device that can never open as configured (one
+// that is not there yet is waited for at a link fault), 3 refused by rt.policy = enforce.
 #include <signal.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -121,7 +122,7 @@ int main(int argc, char** argv) {
     if (args.simulated) std::fprintf(stderr, "haptic-rt: device \"%s\": SIMULATED handle (no hardware)\n", d.name.c_str());
     else if (!device->health().connected)
       std::fprintf(stderr, "haptic-rt: %s; meanwhile the loop holds it at a link fault with zero wrench\n",
-                   rt::silent_device_hint(d, args.rig).c_str());
+                   rt::silent_device_hint(d, device->health(), args.rig).c_str());
     devices.push_back(std::move(device));
   }
 

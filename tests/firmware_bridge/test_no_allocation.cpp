@@ -1,6 +1,8 @@
 // The 1 kHz loop's rule: after open, Device::poll and Device::send neither allocate nor free.
-// Global operator new/delete are replaced in this test binary to count calls while a driver
-// exchanges 1000 ticks with the emulated firmware over the loopback bus.
+// Global operator new/delete are replaced in this test binary to count calls on the test's own
+// thread (the loop's, here; a transport's reopen worker may allocate on its own) while a driver
+// exchanges 1000 ticks with the emulated firmware over the loopback bus, and while a driver
+// whose device is absent at start waits for it.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,22 +14,32 @@
 #include "fake_firmware.hpp"
 #include "hapfluid/device/haptic_arm.hpp"
 #include "hapfluid/device/loopback.hpp"
+#include "hapfluid/device/open_device.hpp"
 
 namespace {
 std::atomic<long> g_allocations{0};
+thread_local bool t_counting = false;
+void count() {
+  if (t_counting) g_allocations.fetch_add(1, std::memory_order_relaxed);
 }
+// Counts on the constructing thread while it lives.
+struct CountingHere {
+  CountingHere() { t_counting = true; }
+  ~CountingHere() { t_counting = false; }
+};
+}  // namespace
 
 void* operator new(std::size_t n) {
-  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  count();
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
 void operator delete(void* p) noexcept {
-  if (p) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (p) count();
   std::free(p);
 }
 void operator delete(void* p, std::size_t) noexcept {
-  if (p) g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (p) count();
   std::free(p);
 }
 
@@ -51,6 +63,7 @@ TEST(RealTimeRules, PollAndSendNeitherAllocateNorFree) {
   command.force_n[2] = 1.0;
   command.enable = true;
   long device_side = 0;
+  CountingHere counting;
   const long before = g_allocations.load();
   for (int tick = 0; tick < 1000; ++tick) {
     arm.send(command);
@@ -69,6 +82,34 @@ TEST(RealTimeRules, PollAndSendNeitherAllocateNorFree) {
   }
   EXPECT_EQ(g_allocations.load() - before - device_side, 0) << "host driver allocated in the loop";
   EXPECT_GT(state.position_m[2], 0.0) << "the exchange really happened";
+}
+
+TEST(RealTimeRules, ADriverWaitingForAnAbsentDeviceNeitherAllocatesNorFrees) {
+  // The arm is not plugged in (none is on a CI machine): the loop keeps calling poll and send
+  // every tick while the transport's worker looks for the device on its own thread.
+  config::RigDevice d;
+  d.name = "absent";
+  d.transport.kind = config::TransportKind::hid;
+  d.transport.address = "1209:4846";
+  std::unique_ptr<device::Device> arm;
+  try {
+    arm = device::open_device(d);
+  } catch (const device::TransportError& e) {
+    GTEST_SKIP() << "no HID device can appear on this machine: " << e.what();
+  }
+  ASSERT_TRUE(arm->health().transport_errors & device::kDisconnected) << "a hapfluid arm is attached";
+  device::DeviceState state;
+  device::DeviceCommand command;
+  command.enable = true;
+  CountingHere counting;
+  const long before = g_allocations.load();
+  for (int tick = 0; tick < 500; ++tick) {  // 0.5 s: the worker searches twice or more meanwhile
+    arm->poll(state);
+    arm->send(command);
+    (void)arm->health();
+    ::usleep(1000);
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0) << "the loop's calls allocated while the device was absent";
 }
 
 }  // namespace

@@ -19,8 +19,9 @@ std::unique_ptr<device::Device> open_rig_device(const config::RigDevice& device,
   }
 }
 
-std::string silent_device_hint(const config::RigDevice& device, const std::string& rig_file) {
-  return device::silent_device_hint(device, rig_file);
+std::string silent_device_hint(const config::RigDevice& device, const device::DeviceHealth& health,
+                               const std::string& rig_file) {
+  return device::silent_device_hint(device, health, rig_file);
 }
 
 }  // namespace hapfluid::rt

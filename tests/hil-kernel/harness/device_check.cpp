@@ -4,6 +4,12 @@
 //
 // Phases, each a functional requirement with a generous limit (guest time under TCG is slow, so
 // no timing figure here means anything; only whether things happen):
+//   0. --plug-cmd (the host starts first, as a rig's services do at boot before the arm is
+//                powered): the device is not there at open; open_device must still return it,
+//                disconnected (a link fault, never an exit), and the start-up hint must say it
+//                is waited for; the driver is polled and commanded like the 1 kHz loop does for
+//                --absent-s, then --plug-cmd makes the device appear (run alongside, the polling
+//                goes on) and the same Device must take it up by itself; the phases below follow.
 //   1. states:   N valid states arrive, sequence numbers advance, no bad frames.
 //   2. commands: clear faults, then stream enable + a force; the device must echo the command
 //                sequence, report motors enabled and no fault (it applied the commands).
@@ -18,6 +24,8 @@
 //                --recover reopen (default) a supervisor drops the device and reopening by the
 //                same address must give states again.
 //   spacemouse (--kind spacemouse): states from 3Dconnexion reports; the pose must move 2 mm.
+#include <spawn.h>
+#include <sys/wait.h>
 #include <time.h>
 
 #include <cmath>
@@ -30,6 +38,8 @@
 #include "hapfluid/device/open_device.hpp"
 #include "hapfluid/device/transport.hpp"
 #include "hapfluid/wire/codec.h"
+
+extern char** environ;
 
 using namespace hapfluid;
 
@@ -57,7 +67,8 @@ struct Options {
   double command_s = 1.0;
   double force_n = 1.5;
   std::string expect;
-  std::string unplug_cmd, replug_cmd;
+  std::string plug_cmd, unplug_cmd, replug_cmd;
+  double absent_s = 1.0;
   std::string recover = "reopen";
   double limit_s = 30;
 };
@@ -128,6 +139,65 @@ int receive_states(device::Device& dev, device::DeviceState& s, int n, double li
   return got;
 }
 
+// `sh -c command` started alongside (the caller keeps polling); its pid.
+pid_t spawn_shell(const std::string& command) {
+  const char* argv[] = {"/bin/sh", "-c", command.c_str(), nullptr};
+  pid_t pid = 0;
+  if (posix_spawn(&pid, "/bin/sh", nullptr, nullptr, const_cast<char**>(argv), environ) != 0)
+    fail("cannot start /bin/sh for: " + command);
+  return pid;
+}
+
+// Phase 0: the device is absent at open, the driver waits for it, and takes it up when it appears.
+void check_absent_then_plugged(device::Device& dev, const Options& o) {
+  const device::DeviceHealth h = dev.health();
+  print_state("absent", device::DeviceState{}, h);
+  if (h.connected || !(h.transport_errors & device::kDisconnected))
+    fail("the device is not there yet, but the driver does not report it disconnected");
+  const std::string hint = device::silent_device_hint(o.device, h);
+  std::printf("start-up hint: %s\n", hint.c_str());
+  const bool waited_for = o.device.transport.kind == config::TransportKind::loopback
+                              ? hint.find("no bus there yet") != std::string::npos
+                              : hint.find("is not connected: ") != std::string::npos &&
+                                    hint.find("waiting for it") != std::string::npos;
+  if (!waited_for) fail("the start-up hint does not say the device is waited for: " + hint);
+  // The loop meanwhile: poll and a zero, disabled command every tick, at a link fault.
+  device::DeviceState s;
+  const device::DeviceCommand zero;
+  int ticks = 0;
+  double longest_ms = 0;
+  const double absent_end = now_s() + o.absent_s;
+  while (now_s() < absent_end) {
+    const double t0 = now_s();
+    dev.poll(s);
+    dev.send(zero);
+    longest_ms = std::fmax(longest_ms, (now_s() - t0) * 1e3);
+    ++ticks;
+    sleep_ms(1);
+  }
+  if (dev.health().connected) fail("the absent device was reported connected");
+  if (ticks < 100) fail("the driver was polled only " + std::to_string(ticks) + " times in " + std::to_string(o.absent_s) + " s");
+  std::printf("PHASE absent: open_device returned the absent device disconnected; %d ticks of poll + send in %.1f s "
+              "(longest %.1f ms), still disconnected\n", ticks, o.absent_s, longest_ms);
+  std::printf("plug: %s\n", o.plug_cmd.c_str());
+  const pid_t plug = spawn_shell(o.plug_cmd);
+  int status = 0;
+  bool plugged = false;
+  if (!run_until(dev, s, o.limit_s, [&](bool) {
+        if (!plugged && waitpid(plug, &status, WNOHANG) == plug) {
+          plugged = true;
+          if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) fail("plug command failed: " + o.plug_cmd);
+        }
+        return dev.health().connected;
+      }, &zero))
+    fail("the device appeared but the driver never took it up (health().connected stays false, transport 0x" +
+         std::to_string(dev.health().transport_errors) + ")");
+  if (!plugged && (waitpid(plug, &status, 0) != plug || !WIFEXITED(status) || WEXITSTATUS(status) != 0))
+    fail("plug command failed: " + o.plug_cmd);
+  print_state("appeared", s, dev.health());
+  std::printf("PHASE appeared: the same driver took the device up by itself\n");
+}
+
 int check_arm(std::unique_ptr<device::Device>& owned, const Options& o) {
   device::Device& dev = *owned;
   device::DeviceState s;
@@ -155,6 +225,7 @@ int check_arm(std::unique_ptr<device::Device>& owned, const Options& o) {
   clear.clear_faults = true;
   if (!run_until(dev, s, o.limit_s, [&](bool) { return s.fault == 0; }, &clear))
     fail("clear_faults did not clear the device faults (fault 0x" + std::to_string(s.fault) + ")");
+  const std::uint64_t send_errors_before = dev.health().send_errors;  // while it was absent, if it was
   device::DeviceCommand cmd;
   cmd.enable = true;
   cmd.force_n[0] = o.force_n;
@@ -168,7 +239,8 @@ int check_arm(std::unique_ptr<device::Device>& owned, const Options& o) {
   h = dev.health();
   print_state("commands", s, h);
   if (echoed < 50) fail("the device never applied the commands: " + std::to_string(echoed) + " states with motors enabled");
-  if (h.send_errors) fail(std::to_string(h.send_errors) + " send errors while commanding");
+  if (h.send_errors > send_errors_before)
+    fail(std::to_string(h.send_errors - send_errors_before) + " send errors while commanding");
   // The device echoes the newest command it applied: once the host stops sending, the echo must
   // reach the last command sent (how long that takes under emulation means nothing).
   const std::uint8_t sent_low = static_cast<std::uint8_t>(h.last_command_sequence & 0xFF);
@@ -274,6 +346,8 @@ int main(int argc, char** argv) {
     else if (a == "--command-s") o.command_s = std::atof(v.c_str());
     else if (a == "--force-n") o.force_n = std::atof(v.c_str());
     else if (a == "--expect") o.expect = v;
+    else if (a == "--plug-cmd") o.plug_cmd = v;
+    else if (a == "--absent-s") o.absent_s = std::atof(v.c_str());
     else if (a == "--unplug-cmd") o.unplug_cmd = v;
     else if (a == "--replug-cmd") o.replug_cmd = v;
     else if (a == "--recover") {
@@ -288,6 +362,7 @@ int main(int argc, char** argv) {
     g_sequence_modulus = 256;
   auto dev = open_within(o.device, o.limit_s);
   std::printf("opened %s\n", dev->name());
+  if (!o.plug_cmd.empty()) check_absent_then_plugged(*dev, o);
   int rc = o.device.kind == config::DeviceKind::spacemouse ? check_spacemouse(*dev, o) : check_arm(dev, o);
   std::printf("CHECKS PASSED\n");
   // Closing is part of the contract too: a driver that crashes when the loop shuts down (or when

@@ -1,5 +1,7 @@
 // The factory the 1 kHz loop calls once per rig device at start-up (not real-time: it may block
 // for the device handshake, allocate and throw TransportError with a message naming the fix).
+// A device that is not there yet is no error: it opens disconnected and is taken up when it
+// appears; only a rig that can never work as configured throws (open_failure.hpp).
 #pragma once
 
 #include <memory>
@@ -14,9 +16,11 @@ namespace hapfluid::device {
 std::unique_ptr<Device> open_device(const config::RigDevice& rig_device);
 
 // What to tell the user about a device that opened but stayed silent through the handshake
-// (health().connected false): absent, unpowered, or, on loopback, its haptic-fake-device not
-// started yet. `rig_file`, when known, goes into the command that starts the fake device.
-std::string silent_device_hint(const config::RigDevice& rig_device, const std::string& rig_file = "");
+// (health().connected false): not connected (kDisconnected: no USB device, CAN interface or
+// loopback bus there yet; its transport waits for it), or connected but not talking (unpowered
+// on its CAN bus). `rig_file`, when known, goes into the command that starts a fake device.
+std::string silent_device_hint(const config::RigDevice& rig_device, const DeviceHealth& health,
+                               const std::string& rig_file = "");
 
 // The transport and framing a rig device's [transport] table asks for, on the given side
 // (the fake device opens the device side of the same description).

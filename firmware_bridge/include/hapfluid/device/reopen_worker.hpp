@@ -1,27 +1,34 @@
-// Reopening a lost USB device without blocking the 1 kHz loop. Opening (libusb_init +
-// enumeration, hid_open) allocates and blocks for milliseconds, so a transport whose device
-// vanished hands the dead handle to this worker's thread, which closes it and calls `open` every
-// `period_ms` until it returns a handle; the loop picks that up with take(). Both directions are
-// one atomic exchange, and waking the idle thread is one futex call: no lock, no allocation, no
-// wait in the loop thread. Used by the libusb and hidapi transports; unit-tested with a fake
-// handle (tests/firmware_bridge/test_reopen_worker.cpp).
+// Reopening a lost device without blocking the 1 kHz loop. Opening (libusb_init + enumeration,
+// hid_open, a CAN socket's bind) allocates and blocks for milliseconds, so a transport whose
+// device vanished, or was absent at open, hands the dead handle (or none) to this worker's
+// thread, which closes it and calls `open` every `period_ms` until it returns a handle; the loop
+// picks that up with take(). Both directions are one atomic exchange, and waking the idle thread
+// is one futex call: no lock, no allocation, no wait in the loop thread. Used by the SocketCAN,
+// libusb and hidapi transports; unit-tested with a fake handle
+// (tests/firmware_bridge/test_reopen_worker.cpp).
 #pragma once
 
 #include <time.h>
 
 #include <atomic>
 #include <functional>
+#include <string>
 #include <thread>
+
+#include "hapfluid/device/open_failure.hpp"
 
 namespace hapfluid::device {
 
 template <class Handle>
 class ReopenWorker {
  public:
-  // open: a new handle, or nullptr (not there yet); never called from the loop thread.
-  // close: releases a handle given back by retire() or never taken.
-  ReopenWorker(std::function<Handle*()> open, std::function<void(Handle*)> close, int period_ms = 200)
-      : open_(std::move(open)), close_(std::move(close)), period_ms_(period_ms), thread_([this] { run(); }) {}
+  // open: a new handle, or nullptr with the attempt saying why (absent, or there but refusing:
+  // both are retried, a persisting refusal is logged once under `name`); never called from the
+  // loop thread. close: releases a handle given back by retire() or never taken.
+  ReopenWorker(std::string name, std::function<Handle*(OpenAttempt&)> open, std::function<void(Handle*)> close,
+               int period_ms = 200)
+      : name_(std::move(name)), open_(std::move(open)), close_(std::move(close)), period_ms_(period_ms),
+        thread_([this] { run(); }) {}
 
   ReopenWorker(const ReopenWorker&) = delete;
   ReopenWorker& operator=(const ReopenWorker&) = delete;
@@ -40,6 +47,15 @@ class ReopenWorker {
     retired_.store(dead);
     int idle = kIdle;
     if (command_.compare_exchange_strong(idle, kReopen)) command_.notify_one();
+  }
+
+  // The transport's constructor: one open on the calling thread. A device absent at open starts
+  // the search (nullptr back: the caller reports kDisconnected and adopts take() later); a
+  // permanent failure comes back in `attempt` for the caller to throw.
+  Handle* first_open(OpenAttempt& attempt) {
+    Handle* h = open_(attempt);
+    if (!h && attempt.failure == OpenFailure::absent) retire(nullptr);
+    return h;
   }
 
   // Loop thread: the reopened handle, once (then the worker idles until the next retire()).
@@ -64,12 +80,15 @@ class ReopenWorker {
         continue;
       }
       close_if(retired_.exchange(nullptr));
-      if (Handle* h = open_()) {
+      OpenAttempt attempt;
+      if (Handle* h = open_(attempt)) {
+        refusals_.clear();
         fresh_.store(h);
         int reopen = kReopen;
         command_.compare_exchange_strong(reopen, kIdle);  // a kStop meanwhile stays
         continue;
       }
+      refusals_.note(name_, attempt);
       for (int ms = 0; ms < period_ms_ && command_.load() == kReopen; ms += 10) {
         timespec nap{0, 10'000'000};
         nanosleep(&nap, nullptr);
@@ -77,7 +96,9 @@ class ReopenWorker {
     }
   }
 
-  std::function<Handle*()> open_;
+  const std::string name_;
+  RefusalLog refusals_;  // the worker thread's only
+  std::function<Handle*(OpenAttempt&)> open_;
   std::function<void(Handle*)> close_;
   const int period_ms_;
   std::atomic<Handle*> retired_{nullptr};

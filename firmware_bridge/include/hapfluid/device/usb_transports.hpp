@@ -1,6 +1,6 @@
 // USB transports: HID reports through hidapi (hidraw backend) and bulk transfers through libusb
 // (asynchronous transfers serviced without blocking). Both fail with a clear message where the
-// kernel or the machine has no such device.
+// machine can have no such device, and wait for one that is not plugged in yet.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +23,11 @@ inline constexpr std::uint8_t kBulkEndpointIn = 0x81;
 inline constexpr std::uint8_t kHidReportDeviceToHost = 0x01;
 inline constexpr std::uint8_t kHidReportHostToDevice = 0x02;
 inline constexpr std::size_t kHidReportBytes = 64;
+
+// Whether a USB device can ever appear here: /sys/bus/usb exists once usbcore runs, which on a
+// rig is from boot (its host controllers). Where it does not (a container, a CI machine), an
+// absent USB device is refused rather than waited for: nothing would ever plug in.
+bool machine_has_usb();
 
 // "1209:4846" -> {0x1209, 0x4846}; throws TransportError naming the text otherwise.
 void parse_vid_pid(const std::string& text, std::uint16_t& vendor, std::uint16_t& product);

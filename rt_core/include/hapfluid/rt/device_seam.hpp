@@ -17,8 +17,10 @@ enum class DeviceBackend { driver, simulated };
 std::unique_ptr<device::Device> open_rig_device(const config::RigDevice& device, DeviceBackend backend,
                                                 std::string& error);
 
-// For a device that opened but is not talking yet (absent, unpowered, its fake not started):
-// what to tell the user, naming the rig file in the command that starts an emulated one.
-std::string silent_device_hint(const config::RigDevice& device, const std::string& rig_file);
+// For a device that opened but is not talking yet (not connected: absent, unplugged, its CAN
+// interface not there; or connected and silent: unpowered, its fake not started): what to tell
+// the user, naming the rig file in the command that starts an emulated one.
+std::string silent_device_hint(const config::RigDevice& device, const device::DeviceHealth& health,
+                               const std::string& rig_file);
 
 }  // namespace hapfluid::rt
