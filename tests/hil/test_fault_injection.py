@@ -51,13 +51,14 @@ def sleep_until(monotonic_s):
 
 # The killed-sim test's hand (device time): holds still through the lead-in (the loop engages the
 # first sim), strokes from LEAD_IN_S + 1 s until REST_AT_S, then rests at its start pose, where a
-# restarted sim's spoon starts too. The sim is SIGKILLed at KILL_AT_S, under the resting load, and
-# restarted at RESTART_AT_S.
+# restarted sim's spoon starts too. The sim is SIGKILLed once the resting hand has carried the
+# spoon's load (> LOADED_N) for LOADED_S, and restarted DEAD_S later.
 REST_AT_S = 4.0
-KILL_AT_S = 5.0
-RESTART_AT_S = 6.0
-# Restarted sim's first sample -> its wrench on the hand: the gate waits for the load to be
-# steady, while the restarted fluid still sloshes around the spoon (measured 0.5-2.0 s).
+LOADED_N, LOADED_S = 0.6, 0.3
+DEAD_S = 1.0
+# Restarted sim's first sample -> its wrench on the hand, in simulated time (hil_stack): the gate
+# waits for the load to be steady, while the restarted fluid still sloshes around the spoon
+# (measured 0.5-2.0 s).
 RECOVERY_BOUND_S = 2.5
 
 
@@ -77,15 +78,27 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     device_t0 = stack.started_at["fake-hand"]
     stack.rt()
     stack.sim("spoon_stirring")
-    sleep_until(device_t0 + KILL_AT_S)
+    sleep_until(device_t0 + REST_AT_S)
+    follower = TraceFollower(stack.dir / "rt-trace.csv")
+
+    def loaded():  # engaged, with more than LOADED_N on the resting hand for LOADED_S on end
+        rows = follower.poll()
+        for r in reversed(rows):
+            if not (engaged(r) and force(r) > LOADED_N):
+                return False
+            if rows[-1]["scheduled_ns"] - r["scheduled_ns"] >= LOADED_S * 1e9:
+                return True
+        return False
+    stack.wait_until(f"the resting hand carried the spoon's load (> {LOADED_N} N for {LOADED_S} s)", loaded,
+                     watch=("rt", "sim", "fake-hand"))
     killed = time.monotonic()
     dead_pid = stack.procs["sim"].pid
     stack.kill("sim")
     assert os.path.exists(f"/dev/shm/{stack.prefix}.sim_samples"), "a SIGKILLed writer cannot unlink"
-    sleep_until(device_t0 + RESTART_AT_S)
+    sleep_until(killed + DEAD_S)
     restarted_ns = time.monotonic_ns()
     stack.sim("spoon_stirring", name="sim2")
-    time.sleep(RECOVERY_BOUND_S + 1.2)  # its first sample comes ~0.5 s after the start
+    stack.wait_until_rendering(sim="sim2")
     codes = {n: stack.stop(n) for n in ("rt", "sim2", "fake-hand")}
     assert codes == {"rt": 0, "sim2": 0, "fake-hand": 0}
     assert stack.leftovers() == []
