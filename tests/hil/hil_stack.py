@@ -398,6 +398,26 @@ class Stack:
         return self.wait_until(f"{name} simulated {sim_time_s} s (it got to {self.sim_time_s(name):.2f} s)",
                                lambda: self.sim_time_s(name) >= sim_time_s, timeout_s, watch=(name,))
 
+    def wait_until_healthy(self, sim="sim", rt="rt", keep_s=0.3, timeout_s=WAIT_TIMEOUT_S):
+        """Until the loop has had device 0's frames and fresh samples of this sim, without a fault,
+        for keep_s on end (engaged or not: the gate may wait for a steady load)."""
+        follower = TraceFollower(self.dir / f"{rt}-trace.csv")
+        sim_started_ns = self.started_at[sim] * 1e9
+
+        def healthy_s():
+            rows = follower.poll()
+            since = None
+            for r in reversed(rows):
+                if int(r["d0_faults"]) or r["sim_publish_ns"] < sim_started_ns or r["sim_age_ns"] > 50e6:
+                    break
+                since = r
+                if rows[-1]["scheduled_ns"] - r["scheduled_ns"] >= keep_s * 1e9:
+                    break
+            return (rows[-1]["scheduled_ns"] - since["scheduled_ns"]) * 1e-9 if since else 0.0
+
+        return self.wait_until(f"{rt} had {sim}'s samples and its device's frames without a fault for {keep_s} s",
+                               lambda: healthy_s() >= keep_s, timeout_s, watch=(rt, sim))
+
     def wait_until_rendering(self, sim="sim", rt="rt", keep_s=KEEP_S, timeout_s=WAIT_TIMEOUT_S):
         """Until device 0 has rendered this sim's samples, engaged and fresh, for keep_s on end
         (read from the loop's trace as it is written; what the hand got is judged afterwards, by
