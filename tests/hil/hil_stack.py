@@ -10,7 +10,12 @@ devices at zero wrench), then the simulator, whose wrench then fades in. A loop 
 sim already pushing more than the rig's engage_threshold_n waits for the wrench to drop below it
 or to hold steady for engage_hold_ms. Every other order works too (test_start_order.py): haptic-rt
 holds a device that is not there yet at a link fault, the sim plays its scene's scripted hands
-until the loop's device states appear, the renderer waits for the sim."""
+until the loop's device states appear, the renderer waits for the sim.
+
+Tests wait for what the parts do (Stack.wait_until and the waits built on it: a simulated time,
+the hand rendering the sim's wrench, read from the sim's status lines and the loop's trace as they
+are written), not for fixed times tuned to one machine: CI machines run the sim at a third of this
+VM's speed and lavapipe at a tenth, and delay the fake device now and then."""
 import csv
 import os
 import pathlib
@@ -250,9 +255,10 @@ class Stack:
     def scene_variant(self, scene, name, **motion):
         """A copy of a shipped scene whose scripted device motions have these keys replaced (scene
         time, before the lead-in), e.g. stop_s=4.5 for a hand that comes to rest then (an
-        oscillation fades out to its start pose). For fake_device's motion="scene:<path>:<device>";
-        the simulator keeps the shipped scene. Lives in <dir>/scenes beside a link to the shipped
-        meshes, so the scene's relative mesh paths still resolve."""
+        oscillation fades out to its start pose). For fake_device's motion="scene:<path>:<device>",
+        or for sim() (its scripted hands, played until the loop's device states appear). Lives in
+        <dir>/scenes beside a link to the shipped meshes, so the scene's relative mesh paths still
+        resolve."""
         scenes, meshes = self.dir / "scenes", self.dir / "meshes"
         scenes.mkdir(exist_ok=True)
         if not meshes.exists():
@@ -380,22 +386,23 @@ class Stack:
         return False
 
     def wait_until(self, what, predicate, timeout_s=WAIT_TIMEOUT_S, watch=()):
-        """Returns time.monotonic() once predicate() holds. Fails naming `what` when it has not
-        after timeout_s, or at once when a process in `watch` stops."""
+        """Returns time.monotonic() once predicate() holds. Fails naming `what` (a text, or a
+        function giving one when it fails) when it has not after timeout_s, or at once when a
+        process in `watch` stops."""
         deadline = time.monotonic() + timeout_s
         while not predicate():
             for name in watch:
                 if self.procs[name].poll() is not None:
-                    raise AssertionError(f"{name} stopped (exit {self.procs[name].returncode}) before {what}: "
-                                         f"{self.log(name)[-1500:]}")
+                    raise AssertionError(f"{name} stopped (exit {self.procs[name].returncode}) before "
+                                         f"{what() if callable(what) else what}: {self.log(name)[-1500:]}")
             if time.monotonic() > deadline:
-                raise AssertionError(f"{what}: not within {timeout_s:.0f} s")
+                raise AssertionError(f"{what() if callable(what) else what}: not within {timeout_s:.0f} s")
             time.sleep(0.05)
         return time.monotonic()
 
     def wait_for_sim_time(self, sim_time_s, name="sim", timeout_s=WAIT_TIMEOUT_S):
         """Until the sim has simulated sim_time_s (its status lines), however slowly it runs here."""
-        return self.wait_until(f"{name} simulated {sim_time_s} s (it got to {self.sim_time_s(name):.2f} s)",
+        return self.wait_until(lambda: f"{name} simulated {sim_time_s} s (it got to {self.sim_time_s(name):.2f} s)",
                                lambda: self.sim_time_s(name) >= sim_time_s, timeout_s, watch=(name,))
 
     def wait_until_healthy(self, sim="sim", rt="rt", keep_s=0.3, timeout_s=WAIT_TIMEOUT_S):
