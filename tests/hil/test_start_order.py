@@ -74,11 +74,12 @@ def assert_ends_rendering(stack, up_s, sim="sim", rt="rt", device="fake-hand"):
     and keeps it; the spoon floats, so the fluid pushes the hand up; the device never applied
     more than the rig allows; and nothing reached the hand from a sample computed without the
     device's pose (sim_device_tick 0: the sim had not identified the device yet)."""
-    trace = read_csv(stack.dir / f"{rt}-trace.csv")
-    got = assert_renders_the_sims_wrench(trace, stack.dir / sim, wall_to_trace_s(trace, up_s), RENDERED_WITHIN_S)
+    trace, device_log = read_csv(stack.dir / f"{rt}-trace.csv"), read_csv(stack.dir / f"{device}.csv")
+    got = assert_renders_the_sims_wrench(trace, stack.dir / sim, wall_to_trace_s(trace, up_s), RENDERED_WITHIN_S,
+                                         device_log=device_log)
     kept = last_kept_stretch(trace, stack.dir / sim)
     assert np.median([r["d0_fz"] for r in kept]) > 0.5, "the floating spoon pushes the hand up"
-    assert_within_limits(read_csv(stack.dir / f"{device}.csv"), MAX_FORCE_N, MAX_TORQUE_NM)
+    assert_within_limits(device_log, MAX_FORCE_N, MAX_TORQUE_NM)
     unidentified = [r for r in trace if r["sim_device_tick"] == 0]
     assert all(force(r) == 0 for r in unidentified), "a wrench before the sim knew the device"
     return trace, got
