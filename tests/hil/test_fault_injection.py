@@ -11,8 +11,9 @@ import time
 import numpy as np
 import pytest
 
-from hil_stack import (FAULT_SIM_STALE, LINK_FAULTS, SCENES, Stack, assert_renders_the_sims_wrench,
-                       assert_within_limits, force, norm3, read_csv, trace_time_s, wall_to_trace_s)
+from hil_stack import (FAULT_SIM_STALE, FLAG_ENGAGING, LINK_FAULTS, SCENES, Stack, TraceFollower,
+                       assert_renders_the_sims_wrench, assert_within_limits, engaged, force, held_up, norm3, read_csv,
+                       runs, trace_time_s, wall_to_trace_s)
 
 MAX_FORCE_N, MAX_TORQUE_NM = 8.0, 0.4
 STALE_PLUS_RAMP_S = 0.050 + 0.100
@@ -30,16 +31,29 @@ def assert_loop_kept_its_rate(stack, trace, t, start_s, seconds):
     """The 1 kHz loop through a fault of another part: 1 ms periods, and at least 95 % of the
     window's periods ticked (a loaded 2-core machine without PREEMPT_RT skips a few as overruns,
     which the loop counts: ticks + overruns = periods), and the device never missed commands long
-    enough to trip its own 20 ms watchdog."""
+    enough to trip its own 20 ms watchdog. A gap in which the fake device was held up too, for at
+    least half of it, is the machine's (a loaded VM whose host stopped both for 20-40 ms), not the
+    fault's: its periods are not counted, as long as such stalls leave most of the window to judge."""
     assert np.median(np.diff([r["scheduled_ns"] for r in trace])) == 1e6
     window = [r for r, ti in zip(trace, t) if start_s <= ti < start_s + seconds]
     assert window and window[-1]["scheduled_ns"] - window[0]["scheduled_ns"] >= 0.99 * seconds * 1e9
     periods = (window[-1]["scheduled_ns"] - window[0]["scheduled_ns"]) / 1e6 + 1
     ticks = window[-1]["tick"] - window[0]["tick"] + 1
     overruns = window[-1]["overruns"] - window[0]["overruns"]
-    longest_ms = np.max(np.diff([r["scheduled_ns"] for r in window])) / 1e6
-    assert ticks >= 0.95 * periods, \
-        f"{ticks:.0f} ticks in {periods:.0f} periods ({overruns:.0f} overruns, longest gap {longest_ms:.0f} ms)"
+    scheduled = np.array([r["scheduled_ns"] for r in window])
+    longest_ms = np.max(np.diff(scheduled)) / 1e6
+    stalls = held_up(read_csv(stack.dir / "fake-hand.csv"))
+    machine = 0  # periods the loop skipped while the device was held up as well
+    for a, b in zip(scheduled[:-1], scheduled[1:]):
+        if b - a <= 1.5e6:
+            continue
+        held = sum(max(0.0, min(b, s1) - max(a, s0)) for s0, s1 in stalls)
+        if held >= 0.5 * (b - a - 1e6):  # (measured: the device stopped 10 ms into a 41 ms stall, until its end)
+            machine += round((b - a) / 1e6) - 1
+    assert machine <= 0.5 * periods, f"the machine stalled the loop and the device for {machine} of {periods:.0f} periods"
+    assert ticks >= 0.95 * (periods - machine), \
+        (f"{ticks:.0f} ticks in {periods:.0f} periods ({overruns:.0f} overruns, {machine} of them in stalls of the "
+         f"whole machine; longest gap {longest_ms:.0f} ms)")
     device = json.loads((stack.dir / "fake-hand.json").read_text())
     assert device["watchdog_trip_s"] < 0, "the device's own watchdog tripped: the loop fell silent"
 
@@ -50,13 +64,14 @@ def sleep_until(monotonic_s):
 
 # The killed-sim test's hand (device time): holds still through the lead-in (the loop engages the
 # first sim), strokes from LEAD_IN_S + 1 s until REST_AT_S, then rests at its start pose, where a
-# restarted sim's spoon starts too. The sim is SIGKILLed at KILL_AT_S, under the resting load, and
-# restarted at RESTART_AT_S.
+# restarted sim's spoon starts too. The sim is SIGKILLed once the resting hand has carried the
+# spoon's load (> LOADED_N) for LOADED_S, and restarted DEAD_S later.
 REST_AT_S = 4.0
-KILL_AT_S = 5.0
-RESTART_AT_S = 6.0
-# Restarted sim's first sample -> its wrench on the hand: the gate waits for the load to be
-# steady, while the restarted fluid still sloshes around the spoon (measured 0.5-2.0 s).
+LOADED_N, LOADED_S = 0.6, 0.3
+DEAD_S = 1.0
+# Restarted sim's first sample -> its wrench on the hand, in simulated time (hil_stack): the gate
+# waits for the load to be steady, while the restarted fluid still sloshes around the spoon
+# (measured 0.5-2.0 s).
 RECOVERY_BOUND_S = 2.5
 
 
@@ -76,15 +91,27 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     device_t0 = stack.started_at["fake-hand"]
     stack.rt()
     stack.sim("spoon_stirring")
-    sleep_until(device_t0 + KILL_AT_S)
+    sleep_until(device_t0 + REST_AT_S)
+    follower = TraceFollower(stack.dir / "rt-trace.csv")
+
+    def loaded():  # engaged, with more than LOADED_N on the resting hand for LOADED_S on end
+        rows = follower.poll()
+        for r in reversed(rows):
+            if not (engaged(r) and force(r) > LOADED_N):
+                return False
+            if rows[-1]["scheduled_ns"] - r["scheduled_ns"] >= LOADED_S * 1e9:
+                return True
+        return False
+    stack.wait_until(f"the resting hand carried the spoon's load (> {LOADED_N} N for {LOADED_S} s)", loaded,
+                     watch=("rt", "sim", "fake-hand"))
     killed = time.monotonic()
     dead_pid = stack.procs["sim"].pid
     stack.kill("sim")
     assert os.path.exists(f"/dev/shm/{stack.prefix}.sim_samples"), "a SIGKILLed writer cannot unlink"
-    sleep_until(device_t0 + RESTART_AT_S)
+    sleep_until(killed + DEAD_S)
     restarted_ns = time.monotonic_ns()
     stack.sim("spoon_stirring", name="sim2")
-    time.sleep(RECOVERY_BOUND_S + 1.2)  # its first sample comes ~0.5 s after the start
+    stack.wait_until_rendering(sim="sim2")
     codes = {n: stack.stop(n) for n in ("rt", "sim2", "fake-hand")}
     assert codes == {"rt": 0, "sim2": 0, "fake-hand": 0}
     assert stack.leftovers() == []
@@ -106,7 +133,8 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     # gets that sim's wrench: engaged, from fresh samples, the very F0 the restarted sim logged for
     # the sample in use (its couplings.csv), and keeps it.
     first = next(i for i, r in enumerate(trace) if r["sim_publish_ns"] >= restarted_ns)
-    got = assert_renders_the_sims_wrench(trace, stack.dir / "sim2", t[first], RECOVERY_BOUND_S)
+    got = assert_renders_the_sims_wrench(trace, stack.dir / "sim2", t[first], RECOVERY_BOUND_S,
+                                         device_log=read_csv(stack.dir / "fake-hand.csv"))
     print(f"restarted sim: first sample {t[first] - k:.2f} s after the kill; {got}")
 
 
@@ -209,64 +237,146 @@ def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
 # Re-engaging under a resting load (issue 8), fake_single's engage keys: link_recover_ms 100,
 # engage_hold_ms 150, engage_steady_band_n 0.5, engage_ramp_ms 200, engage_ramp_rate_n_per_s 20.
 RESTING_LOAD_N = 4.0
-FAULT_AT_S = 4.0  # device time; the loop and the stand-in sim are running and engaged well before
+CARRY_S = 0.45  # the hand carries the load this long before the fault ...
+CARRIED_AGAIN_S = 0.5  # ... and this long after its recovery, when the run stops
+FAULT_AT_S = 4.0  # device time of the bus-off; the loop and the stand-in carry the load from ~0.9 s
+BUS_OFF_MS = 200
+STAND_IN_DEAD_S = 0.5
+# A run whose hand was not carrying the load when the fault came, because a stray link timeout
+# (the fake device woken > 5 ms late on a loaded VM) had it at the engage gate, cannot show the
+# rule for the fault under test; it is run again, this many times at most.
+ATTEMPTS = 3
+# The engage ramp's steps: 20 N/s, 0.020 N per ms of loop time, plus the coupling spring's
+# 300 N/m times how far the hand moved as it yields to the rising load (20 N/s on the fake arm's
+# 400 N/m grip: 0.05 m/s, 0.015 N per ms): in a tick that takes a new sim sample, since the
+# previous sample (x0 follows the hand at the stand-in's 200 Hz: 0.075 N after 5 ms, 0.084 N when
+# a loaded machine delayed a sample to 5.6 ms), in the others within the tick. Measured: at most
+# 0.93 of these bounds (0.0964 N after a 5.1 ms sample interval); all far below the rate limit's
+# 0.8 N per tick.
+RAMP_STEP_N_PER_MS = 0.020
+CATCH_UP_N_PER_MS = 0.016
+
+
+def carrying(row) -> bool:
+    return engaged(row) and abs(force(row) - RESTING_LOAD_N) < 0.3
+
+
+def carried_for(follower, seconds, after_monotonic_s=0.0) -> bool:
+    """The hand has carried the load, engaged, for `seconds` on end (since after_monotonic_s)."""
+    rows = follower.poll()
+    for r in reversed(rows):
+        if r["scheduled_ns"] < after_monotonic_s * 1e9 or not carrying(r):
+            return False
+        if rows[-1]["scheduled_ns"] - r["scheduled_ns"] >= seconds * 1e9:
+            return True
+    return False
+
+
+def run_resting_load(stack, fault):
+    """The hand holds still under the stand-in's steady 4 N; the fault comes once it has carried
+    the load (the sim) or at FAULT_AT_S of device time (the bus-off, scheduled by the device);
+    the run stops once the hand has carried it again for CARRIED_AGAIN_S. Returns both instants
+    (time.monotonic())."""
+    sim_args = ("--force", f"0,0,{-RESTING_LOAD_N}", "--stiffness", "300", "--rate", "200")
+    extra = ("--bus-off-at", str(FAULT_AT_S), "--bus-off-ms", str(BUS_OFF_MS)) if fault == "link" else ()
+    stack.fake_device("hand", motion="hold", extra=extra)
+    stack.rt()
+    stack.standin(*sim_args)
+    follower = TraceFollower(stack.dir / "rt-trace.csv")
+    if fault == "sim":
+        stack.wait_until(f"the hand carried the stand-in's {RESTING_LOAD_N} N for {CARRY_S} s",
+                         lambda: carried_for(follower, CARRY_S + 0.05), watch=("rt", "standin", "fake-hand"))
+        fault_at = time.monotonic()
+        stack.kill("standin")
+        time.sleep(STAND_IN_DEAD_S)
+        stack.standin(*sim_args, name="standin2")
+    else:
+        fault_at = stack.started_at["fake-hand"] + FAULT_AT_S  # (the trace's own instant: the device log)
+        sleep_until(fault_at + BUS_OFF_MS * 1e-3)
+    sim = "standin2" if fault == "sim" else "standin"
+    again_at = stack.wait_until("the hand carried the load again", lambda: carried_for(follower, CARRIED_AGAIN_S, fault_at),
+                                watch=("rt", sim, "fake-hand"))
+    codes = {n: stack.stop(n) for n in ("rt", sim, "fake-hand")}
+    assert set(codes.values()) == {0}, codes
+    return fault_at, again_at
 
 
 @pytest.mark.parametrize("fault", ["link", "sim"])
-def test_a_hand_holding_a_resting_load_gets_it_back_through_the_ramp_after_a_fault(stack, fault):
+def test_a_hand_holding_a_resting_load_gets_it_back_through_the_ramp_after_a_fault(binary, tmp_path, fault):
     # The hand carries a steady 4 N (the stand-in sim's F0, as a held bucket's weight; coupling
     # spring 300 N/m about the hand's own pose). Either the device goes bus-off for 200 ms (long
     # enough to trip its own 20 ms command watchdog, which the loop then clears while disabled),
     # or the sim is SIGKILLed and restarted. The load never drops below engage_threshold_n, yet
     # the hand must get it back: zero during the fault, then, once the load has been steady for
     # engage_hold_ms, a ramp no faster than 20 N/s (>= 200 ms for 4 N) back to 4 N.
-    sim_args = ("--force", f"0,0,{-RESTING_LOAD_N}", "--stiffness", "300", "--rate", "200")
-    extra = ("--bus-off-at", str(FAULT_AT_S), "--bus-off-ms", "200") if fault == "link" else ()
-    stack.fake_device("hand", motion="hold", extra=extra)
-    device_t0 = stack.started_at["fake-hand"]
-    stack.rt()
-    stack.standin(*sim_args)
-    time.sleep(max(0.0, device_t0 + FAULT_AT_S - time.monotonic()))
-    fault_at = time.monotonic()
-    if fault == "sim":
-        stack.kill("standin")
-        time.sleep(0.5)
-        stack.standin(*sim_args, name="standin2")
-    time.sleep(1.5)
-    sims = ("standin2",) if fault == "sim" else ("standin",)
-    codes = {n: stack.stop(n) for n in ("rt", *sims, "fake-hand")}
-    assert set(codes.values()) == {0}, codes
+    for attempt in range(ATTEMPTS):
+        (tmp_path / f"attempt{attempt}").mkdir()
+        stack = Stack(binary, tmp_path / f"attempt{attempt}", tag="fault")
+        try:
+            fault_at, again_at = run_resting_load(stack, fault)
+        finally:
+            stack.close()
+        trace = read_csv(stack.dir / "rt-trace.csv")
+        device = read_csv(stack.dir / "fake-hand.csv")
+        t = trace_time_s(trace)
+        if fault == "link":  # the device's own tick at FAULT_AT_S, on the trace's clock
+            k = wall_to_trace_s(trace, next(r["tick_ns"] for r in device if r["t_s"] >= FAULT_AT_S) * 1e-9)
+        else:
+            k = wall_to_trace_s(trace, fault_at)
+        f = np.array([force(r) for r in trace])
+        faults = np.array([int(r["d0_faults"]) for r in trace])
+        before = (t > k - CARRY_S) & (t < k - 0.05)
+        if before.any() and all(carrying(r) for r, b in zip(trace, before) if b):
+            break
+        stray = [ti for i, ti in enumerate(t) if k - CARRY_S - 0.6 < ti < k - 0.05 and faults[i] & LINK_FAULTS
+                 and not faults[i - 1] & LINK_FAULTS]
+        assert stray, f"the hand carried the load before: {f[before].min() if before.any() else None} .. " \
+                      f"{f[before].max() if before.any() else None} N"
+        print(f"attempt {attempt}: a stray link timeout at t = {stray[-1]:.3f} s had the hand at the engage gate "
+              f"when the fault came at t = {k:.3f} s")
+    else:
+        raise AssertionError(f"in {ATTEMPTS} runs a stray link timeout had the hand at the engage gate when the fault came")
 
-    trace = read_csv(stack.dir / "rt-trace.csv")
-    t = trace_time_s(trace)
-    k = wall_to_trace_s(trace, fault_at)
-    f = np.array([force(r) for r in trace])
-    faults = np.array([int(r["d0_faults"]) for r in trace])
-    carrying = f[(t > k - 0.5) & (t < k - 0.05)]
-    assert carrying.size and np.all(np.abs(carrying - RESTING_LOAD_N) < 0.3), \
-        f"the hand carried the load before: {carrying.min() if carrying.size else None} .. {carrying.max() if carrying.size else None} N"
     cause = LINK_FAULTS if fault == "link" else FAULT_SIM_STALE
     # The fault and its zero wrench (a link fault zeroes at once, a dead sim through its ramp) ...
     search = int(np.argmax(t > k - 0.2))  # (the trace also starts with a link fault: no frame yet)
     onset = search + int(np.argmax((faults[search:] & cause) != 0))
     assert faults[onset] & cause and abs(t[onset] - k) < 0.3, (t[onset], k)
     zero_from = onset + (6 if fault == "link" else int((STALE_PLUS_RAMP_S - 0.05) * 1000) + 2)
-    cleared = onset + int(np.argmax(faults[onset:] == 0))
+    cleared = onset + int(np.argmax((faults[onset:] & cause) == 0))
     assert cleared > zero_from and np.all(f[zero_from:cleared] < 1e-9), (t[onset], t[zero_from], t[cleared])
-    # ... then nothing until the load has been steady for engage_hold_ms ...
-    back = cleared + int(np.argmax(f[cleared:] > 0))
-    assert f[back] > 0, "never re-engaged under the resting load"
-    assert 0.14 <= t[back] - t[cleared] <= 0.6, t[back] - t[cleared]
-    # ... and a ramp to the full load: >= 4 N / 20 N/s, in steps of 0.02 N (plus the spring's own
-    # steps as the hand yields and x0 follows at 200 Hz), far below the 0.8 N/tick rate limit.
-    full = back + int(np.argmax(f[back:] > 0.95 * RESTING_LOAD_N))
+    # ... then, from the end of the last fault before the hand has the load again (the fault under
+    # test, or a stray link timeout during its recovery, which restarts it: the rule), nothing
+    # until the load has been steady for engage_hold_ms ...
+    full = cleared + int(np.argmax((f[cleared:] > 0.95 * RESTING_LOAD_N) & (faults[cleared:] == 0)))
     assert f[full] > 0.95 * RESTING_LOAD_N, "did not reach the load again"
+    back = int(np.flatnonzero(f[:full] < 1e-9)[-1]) + 1
+    assert back > cleared, "never re-engaged under the resting load"
+    recovered = int(np.flatnonzero(faults[:back] != 0)[-1]) + 1
+    assert np.all(f[recovered:back] < 1e-9) and 0.14 <= t[back] - t[recovered] <= 0.6, t[back] - t[recovered]
+    aborted = [i for i in range(cleared, recovered)
+               if f[i] > 1e-9 and not faults[i] and not int(trace[i]["d0_flags"]) & FLAG_ENGAGING]
+    assert not aborted, f"a wrench outside a ramp between the faults, from t = {t[aborted[0]]:.3f} s"
+    # ... and a ramp to the full load: >= 4 N / 20 N/s, each tick's step the ramp's plus the
+    # spring's catch-up at a new sample (far below the 0.8 N/tick rate limit).
     assert 0.18 <= t[full] - t[back] <= 0.6, t[full] - t[back]
-    assert np.max(np.abs(np.diff(f[back:full + 1]))) < 0.1
-    assert np.median(np.abs(np.diff(f[back:full + 1]))) < 0.0201
-    assert np.all(np.abs(f[t > t[-1] - 0.3] - RESTING_LOAD_N) < 0.3), "carrying it again at the end"
+    ramp = range(back, full + 1)
+    scheduled = np.array([trace[i]["scheduled_ns"] for i in ramp]) * 1e-6
+    published = np.array([trace[i]["sim_publish_ns"] for i in ramp]) * 1e-6
+    steps = np.abs(np.diff(f[back:full + 1]))
+    moved_ms = np.where(np.diff(published) > 0, np.diff(published), np.diff(scheduled))
+    allowed = RAMP_STEP_N_PER_MS * np.diff(scheduled) + CATCH_UP_N_PER_MS * moved_ms + 0.002
+    worst = int(np.argmax(steps / allowed))
+    assert np.all(steps <= allowed), (f"a step of {steps[worst]:.4f} N at t = {t[back + worst + 1]:.3f} s "
+                                      f"(allowed {allowed[worst]:.4f} N: {moved_ms[worst]:.2f} ms of the hand's yield)")
+    assert np.median(steps) < 0.0201
+    again = (t > wall_to_trace_s(trace, again_at) - CARRIED_AGAIN_S) & (t <= wall_to_trace_s(trace, again_at))
+    assert again.any() and all(carrying(r) for r, a in zip(trace, again) if a), "carrying it again at the end"
     if fault == "link":
         assert "watchdog" in stack.log("fake-hand"), "the 200 ms bus-off tripped the device's own watchdog"
-        device = read_csv(stack.dir / "fake-hand.csv")
-        tail = [r for r in device if r["t_s"] > device[-1]["t_s"] - 0.3]
+        tail = [r for r in device if again_at - CARRIED_AGAIN_S < r["tick_ns"] * 1e-9 <= again_at]
         assert np.median([norm3(r, "applied_f") for r in tail]) > 0.9 * RESTING_LOAD_N, "the device applies it again"
+    strays = len(runs(list(faults[cleared:recovered] != 0)))
+    print(f"{fault} fault: onset {t[onset] - k:+.3f} s, cleared {t[cleared] - k:.3f} s, {strays} stray faults in the "
+          f"recovery, back {t[back] - t[recovered]:.3f} s after the last fault, full {t[full] - t[back]:.3f} s later, largest step {steps[worst]:.4f} N "
+          f"({steps[worst] / allowed[worst]:.2f} of its bound)")

@@ -9,7 +9,7 @@ import subprocess
 
 import pytest
 
-LIGHT = "tests/sim_gpu_vulkan/scenes/live_stirring_light.toml"  # 250 steps per simulated second
+LIGHT = "tests/sim_gpu_vulkan/scenes/live_stirring_light.toml"  # 100 steps per simulated second
 STIRRING = "config/scenes/spoon_stirring.toml"  # make run's default scene, ~950 steps/s
 MIN_VULKAN_RTF = 1.1  # live_backend.hpp: auto runs Vulkan when its probe's real-time factor is at least this
 
@@ -37,10 +37,11 @@ def no_driver_env():
 
 
 def test_auto_runs_vulkan_on_a_scene_it_keeps_up_with(binary, source_dir, tmp_path):
-    # The default: the live fluid on Vulkan (lavapipe here). The light scene needs 250
-    # steps/s; lavapipe makes ~700 on this 2-core machine, so the probe keeps Vulkan and the run
-    # follows the wall clock. A machine loaded by something else can slow the probe below the bar:
-    # then auto must have followed its rule (cpu, said loudly), and the run is tried again.
+    # The default: the live fluid on Vulkan (lavapipe here). The light scene needs 100
+    # steps/s (its fixed 10 ms step); lavapipe made 220-630 on this 2-core machine under two CPU
+    # hogs (probe real-time factor >= 2.2, twice the bar), so the probe keeps Vulkan and the run
+    # follows the wall clock. A machine loaded by something else can still slow the probe below
+    # the bar: then auto must have followed its rule (cpu, said loudly), and the run is tried again.
     for attempt in range(3):
         out = tmp_path / f"attempt{attempt}"
         result = live(binary, source_dir, out, LIGHT, "auto", duration_s=2.0)
@@ -60,7 +61,7 @@ def test_auto_runs_vulkan_on_a_scene_it_keeps_up_with(binary, source_dir, tmp_pa
     assert "backend vulkan on " + stats["device"]["name"] in line and "keeps up" in line
     # It keeps up: simulated time followed the wall clock (within the 1 s run's last step).
     assert stats["kept_up_with_wall_clock"] and stats["real_time_factor"] > 0.95
-    assert stats["sim_samples_published"] == stats["steps"] > 400  # 250 steps/s, one sample per step
+    assert stats["sim_samples_published"] == stats["steps"] > 160  # 100 steps/s for 2 s, one sample per step
     assert stats["particle_frames_published"] >= 55  # 30 Hz scene frames, read back from the device
 
 
