@@ -58,6 +58,9 @@ Domain read_domain(Reader& r) {
 
 Fluid read_fluid(Reader& r, const Domain& domain) {
   Fluid f;
+  f.solver = r.choice<PressureSolver>("solver", PressureSolver::wcsph,
+                                      {{"dfsph", PressureSolver::dfsph}, {"wcsph", PressureSolver::wcsph}});
+  const bool wcsph = f.solver == PressureSolver::wcsph;
   f.rest_density_kg_m3 = r.number("rest_density_kg_m3", f.rest_density_kg_m3);
   r.check("rest_density_kg_m3", f.rest_density_kg_m3 > 0, "must be > 0");
   f.particle_spacing_m = r.required_number("particle_spacing_m");
@@ -70,12 +73,24 @@ Fluid read_fluid(Reader& r, const Domain& domain) {
   f.speed_of_sound_m_s = r.number("speed_of_sound_m_s", 0.0);
   if (r.has("stiffness_pa")) r.check("stiffness_pa", f.stiffness_pa > 0, "must be > 0");
   if (r.has("speed_of_sound_m_s")) r.check("speed_of_sound_m_s", f.speed_of_sound_m_s > 0, "must be > 0");
-  if (!r.has("stiffness_pa") && !r.has("speed_of_sound_m_s"))
-    r.problem("speed_of_sound_m_s", "missing (give speed_of_sound_m_s or stiffness_pa for the pressure law, eq. 7)");
+  if (wcsph && !r.has("stiffness_pa") && !r.has("speed_of_sound_m_s"))
+    r.problem("speed_of_sound_m_s", "missing (give speed_of_sound_m_s or stiffness_pa for the pressure law, eq. 7, of solver = \"wcsph\")");
   if (r.has("stiffness_pa") && r.has("speed_of_sound_m_s"))
     r.problem("stiffness_pa", "give either stiffness_pa or speed_of_sound_m_s, not both");
   f.viscosity_pa_s = r.number("viscosity_pa_s", f.viscosity_pa_s);
   r.check("viscosity_pa_s", f.viscosity_pa_s >= 0, "must be >= 0");
+  f.density_error_percent = r.number("density_error_percent", f.density_error_percent);
+  r.check("density_error_percent", f.density_error_percent >= 0.001 && f.density_error_percent <= 5, "must be in [0.001, 5] %");
+  f.divergence_error_percent = r.number("divergence_error_percent", f.divergence_error_percent);
+  r.check("divergence_error_percent", f.divergence_error_percent >= 0.001 && f.divergence_error_percent <= 5,
+          "must be in [0.001, 5] %");
+  f.max_solver_iterations = static_cast<int>(r.integer("max_solver_iterations", f.max_solver_iterations));
+  r.check("max_solver_iterations", f.max_solver_iterations >= 2 && f.max_solver_iterations <= 1000, "must be 2..1000");
+  f.xsph_fraction = r.number("xsph_fraction", f.xsph_fraction);
+  r.check("xsph_fraction", f.xsph_fraction >= 0 && f.xsph_fraction <= 0.5, "must be in [0, 0.5]");
+  if (wcsph)
+    for (const char* key : {"density_error_percent", "divergence_error_percent", "max_solver_iterations", "xsph_fraction"})
+      if (r.has(key)) r.problem(key, "applies to solver = \"dfsph\" only (this fluid uses \"wcsph\")");
   f.gravity_m_s2 = r.vec3("gravity_m_s2", f.gravity_m_s2);
   f.look = r.choice<FluidLook>("look", FluidLook::water,
                                {{"water", FluidLook::water}, {"batter", FluidLook::batter},
@@ -99,8 +114,9 @@ Fluid read_fluid(Reader& r, const Domain& domain) {
   return f;
 }
 
-TimeStepping read_time(Reader& r) {
+TimeStepping read_time(Reader& r, PressureSolver solver) {
   TimeStepping t;
+  t.cfl = solver == PressureSolver::wcsph ? TimeStepping::kDefaultCflWcsph : TimeStepping::kDefaultCflDfsph;
   t.dt_s = r.number("dt_s", 0.0);
   r.check("dt_s", t.dt_s >= 0 && t.dt_s <= 0.01, "must be 0 (CFL) or a step in (0, 0.01] s");
   t.cfl = r.number("cfl", t.cfl);  // default: TimeStepping::cfl
@@ -304,7 +320,11 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   else r.problem("domain", "missing (a [domain] table with min_m and max_m is required)");
   if (auto f = r.table("fluid")) scene.fluid = read_fluid(*f, scene.domain);
   else r.problem("fluid", "missing (a [fluid] table is required)");
-  if (auto t = r.table("time")) scene.time = read_time(*t);
+  if (auto t = r.table("time")) {
+    scene.time = read_time(*t, scene.fluid.solver);
+  } else {
+    scene.time.cfl = scene.fluid.solver == PressureSolver::wcsph ? TimeStepping::kDefaultCflWcsph : TimeStepping::kDefaultCflDfsph;
+  }
 
   std::set<std::string> names;
   auto unique = [&](Reader& item, const std::string& name, const char* what) {
@@ -357,6 +377,7 @@ const char* to_string(FluidLook l) {
   }
   return "?";
 }
+const char* to_string(PressureSolver s) { return s == PressureSolver::wcsph ? "wcsph" : "dfsph"; }
 const char* to_string(DeviceSource s) { return s == DeviceSource::rig ? "rig" : "scripted"; }
 
 }  // namespace hapfluid::config

@@ -32,6 +32,8 @@ class VulkanLiveSolver final : public LiveSolver {
     return {d.name, d.type, d.driver};
   }
   int threads() const override { return 0; }
+  std::uint64_t clamped_particle_count() const override { return solver_.clamped_particle_count(); }
+  PhaseTimes phase_times() const override { return solver_.phase_times(); }
 
  private:
   vulkan::VulkanSolver solver_;
@@ -79,7 +81,7 @@ BackendProbe probe_backend(LiveSolver& solver, double simulated_s, double wall_s
 
 std::unique_ptr<LiveSolver> make_live_solver(const SimulationModel& model, const std::string& backend,
                                              const LiveBackendOptions& options) {
-  if (backend == "cpu") return std::make_unique<CpuLiveSolver>(model, options.threads);
+  if (backend == "cpu") return make_cpu_solver(model, options.threads);
 #ifdef HAPFLUID_WITH_VULKAN
   if (backend == "vulkan") return make_vulkan(model, options);
 #endif
@@ -98,7 +100,7 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   const SimulationModel model = build_model(scene);
   LiveBackend r;
   r.requested = o.backend;
-  auto make_cpu = [&] { return std::make_unique<CpuLiveSolver>(model, o.threads); };
+  auto make_cpu = [&] { return make_cpu_solver(model, o.threads); };
   if (o.backend == "cpu") {
     r.solver = make_cpu();
     r.reason = "--backend cpu";
@@ -157,8 +159,8 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
     return r;
   }
   {
-    CpuLiveSolver cpu_probe(model, o.threads);
-    r.cpu_probe = probe_backend(cpu_probe, o.probe_simulated_s, o.probe_wall_s);
+    std::unique_ptr<LiveSolver> cpu_probe = make_cpu_solver(model, o.threads);
+    r.cpu_probe = probe_backend(*cpu_probe, o.probe_simulated_s, o.probe_wall_s);
   }
   const bool cpu_faster = r.cpu_probe.real_time_factor() > r.vulkan_probe.real_time_factor();
   const std::string both = "Vulkan on " + vulkan_name + ": " + probe_words(r.vulkan_probe) + "; cpu backend (" +

@@ -1,5 +1,7 @@
 #include "live_runner.hpp"
 
+#include "hapfluid/sim/thread_pool.hpp"
+
 #include <signal.h>
 #include <time.h>
 

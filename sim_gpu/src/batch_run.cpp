@@ -8,7 +8,8 @@
 #include <stdexcept>
 
 #include "hapfluid/config/scene.hpp"
-#include "hapfluid/sim/cpu_solver.hpp"
+#include "hapfluid/sim/solver.hpp"
+#include "hapfluid/sim/thread_pool.hpp"
 #include "hapfluid/sim/outputs.hpp"
 
 namespace hapfluid::sim {
@@ -16,7 +17,7 @@ namespace {
 
 std::string num(double v) { return csv_number(v); }
 
-std::string stats_json(const CpuSolver& solver, const BatchOptions& o, const BatchResult& r, double dt_min, double dt_max,
+std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchResult& r, double dt_min, double dt_max,
                        bool complete, const std::string& error) {
   const SimulationModel& m = solver.model();
   const std::size_t fluid = m.fluid.size(), walls = m.wall_particle_count, statics = m.static_body_particle_count,
@@ -24,13 +25,15 @@ std::string stats_json(const CpuSolver& solver, const BatchOptions& o, const Bat
   const std::size_t total = fluid + walls + statics + bodies;
   const double steps = static_cast<double>(r.steps);
   const double wall = r.wall_time_s > 0 ? r.wall_time_s : 1e-12;
-  const PhaseTimes& t = solver.phase_times();
+  const PhaseTimes t = solver.phase_times();
+  const SolverIterations it = solver.iterations();
   auto per_step_ms = [&](double s) { return num(steps > 0 ? 1000.0 * s / steps : 0.0); };
   std::ostringstream j;
   j << "{\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
   if (!complete) j << "  \"error\": \"" << json_escape(error) << "\",\n";
   j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
     << "  \"backend\": \"" << o.backend << "\",\n"
+    << "  \"solver\": \"" << solver.method() << "\",\n"
     << "  \"threads\": " << solver.threads() << ",\n"
     << "  \"particles\": {\"fluid\": " << fluid << ", \"boundary\": " << walls << ", \"static_body\": " << statics
     << ", \"body\": " << bodies << ", \"total\": " << total << "},\n"
@@ -45,8 +48,13 @@ std::string stats_json(const CpuSolver& solver, const BatchOptions& o, const Bat
     << "  \"real_time_factor\": " << num(r.simulated_time_s / wall) << ",\n"
     << "  \"frames_exported\": " << r.frames_exported << ",\n"
     << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"
+    << "  \"solver_iterations\": {\"density_per_step\": " << num(steps > 0 ? it.density_iterations / steps : 0)
+    << ", \"divergence_per_step\": " << num(steps > 0 ? it.divergence_iterations / steps : 0)
+    << ", \"unconverged_solves\": " << it.unconverged_solves
+    << ", \"max_mean_density_error\": " << num(it.max_density_error) << "},\n"
     << "  \"phase_ms_per_step\": {\"neighbour_search\": " << per_step_ms(t.neighbour_search_s)
     << ", \"density\": " << per_step_ms(t.density_s) << ", \"forces\": " << per_step_ms(t.forces_s)
+    << ", \"pressure_solve\": " << per_step_ms(t.pressure_s)
     << ", \"bodies\": " << per_step_ms(t.bodies_s) << ", \"integration\": " << per_step_ms(t.integration_s) << "}\n}\n";
   return j.str();
 }
@@ -69,7 +77,8 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   // The scene loads and builds before the output folder is touched: a bad scene leaves a
   // previous run there as it was. From here on, nothing of the previous run may remain to pass
   // for this run's outputs.
-  CpuSolver solver(build_model(scene), o.threads);
+  std::unique_ptr<Solver> solver_ptr = make_cpu_solver(build_model(scene), o.threads);
+  Solver& solver = *solver_ptr;
   const SimulationModel& m = solver.model();
   std::filesystem::create_directories(o.out / "particles");
   remove_previous_outputs(o.out);
@@ -106,7 +115,7 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
       const int substeps = solver.advance(t1 - t0, set_devices);
       const double dt = (t1 - t0) / substeps;
       dt_min = std::min(dt_min, dt), dt_max = std::max(dt_max, dt);
-      solver.check_finite();
+      solver.sync_and_check_finite();
       r.steps = solver.steps();
       r.simulated_time_s = t1;
       record(t1);

@@ -7,12 +7,11 @@
 
 namespace hapfluid::sim {
 
-std::vector<Vec3> wall_particle_positions(const config::Domain& domain, double spacing_m) {
+std::vector<Vec3> wall_particle_positions(const config::Domain& domain, double spacing_m, int layers) {
   const double lo[3] = {domain.box.min_m.x, domain.box.min_m.y, domain.box.min_m.z};
   const double hi[3] = {domain.box.max_m.x, domain.box.max_m.y, domain.box.max_m.z};
   const bool low_wall[3] = {domain.walls.x_min, domain.walls.y_min, domain.walls.floor};
   const bool high_wall[3] = {domain.walls.x_max, domain.walls.y_max, domain.walls.ceiling};
-  const int layers = domain.boundary_layers;
   // Per axis a lattice that fits the box exactly: n cells of spacing close to spacing_m, with
   // the first wall layer half a spacing behind each face, where a fluid lattice would continue.
   int n[3];
@@ -34,7 +33,10 @@ std::vector<Vec3> wall_particle_positions(const config::Domain& domain, double s
   return out;
 }
 
-std::vector<float> boundary_volumes(const std::vector<Vec3>& p, const KernelConstants& kernel) {
+namespace {
+
+template <class Kernel>
+std::vector<float> volumes_with(const std::vector<Vec3>& p, float h, Kernel&& w) {
   std::vector<float> volume(p.size(), 0.0f);
   if (p.empty()) return volume;
   float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
@@ -44,7 +46,7 @@ std::vector<float> boundary_volumes(const std::vector<Vec3>& p, const KernelCons
     lo[0] = std::min(lo[0], x[i]), lo[1] = std::min(lo[1], y[i]), lo[2] = std::min(lo[2], z[i]);
     hi[0] = std::max(hi[0], x[i]), hi[1] = std::max(hi[1], y[i]), hi[2] = std::max(hi[2], z[i]);
   }
-  const GridGeometry grid = make_grid(lo, hi, kernel.h);
+  const GridGeometry grid = make_grid(lo, hi, h);
   CellSort sort;
   sort.sort(grid, x.data(), y.data(), z.data(), p.size());
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -53,12 +55,22 @@ std::vector<float> boundary_volumes(const std::vector<Vec3>& p, const KernelCons
       for (std::uint32_t s = b; s < e; ++s) {
         const std::uint32_t k = sort.order[s];
         const float dx = x[i] - x[k], dy = y[i] - y[k], dz = z[i] - z[k];
-        sum += poly6(kernel, dx * dx + dy * dy + dz * dz);
+        sum += w(dx * dx + dy * dy + dz * dz);
       }
     });
     volume[i] = static_cast<float>(1.0 / sum);
   }
   return volume;
+}
+
+}  // namespace
+
+std::vector<float> boundary_volumes(const std::vector<Vec3>& p, const KernelConstants& kernel) {
+  return volumes_with(p, kernel.h, [&](float r2) { return poly6(kernel, r2); });
+}
+
+std::vector<float> boundary_volumes(const std::vector<Vec3>& p, const CubicKernel& kernel) {
+  return volumes_with(p, kernel.h, [&](float r2) { return cubic_w(kernel, std::sqrt(r2)); });
 }
 
 }  // namespace hapfluid::sim

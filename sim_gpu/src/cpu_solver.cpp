@@ -8,6 +8,8 @@
 
 #include "hapfluid/sim/contact_damping.hpp"
 #include "hapfluid/sim/finite_state.hpp"
+#include "body_contacts.hpp"
+#include "body_step.hpp"
 #include "sph_passes.hpp"
 
 namespace hapfluid::sim {
@@ -15,17 +17,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-// sum over a run of grid candidates of w_j W-shape (the poly6 shape, zero beyond h).
-inline float poly6_run_weighted(const float* x, const float* y, const float* z, const float* w, std::uint32_t b,
-                                std::uint32_t e, float xi, float yi, float zi, const KernelConstants& k) {
-  float sum = 0;
-  for (std::uint32_t j = b; j < e; ++j) {
-    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-    sum += w[j] * poly6_shape(k, dx * dx + dy * dy + dz * dz);
-  }
-  return sum;
-}
 
 }  // namespace
 
@@ -44,15 +35,7 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
   if (m_.body_particles.size() > 0) build_body_view();
   neighbour_ranges_.resize(m_.fluid.size());
   pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_density(b, e, w); });
-  // Body particle velocities at start (eq. 14 with the initial body velocities).
-  for (const RigidBody& body : m_.bodies) {
-    if (!body.dynamic) continue;
-    BodyParticles& bp = m_.body_particles;
-    for (std::uint32_t i = body.first_particle; i < body.first_particle + body.particle_count; ++i) {
-      const Vec3 v = body.velocity_at({bp.x[i], bp.y[i], bp.z[i]});
-      bp.vx[i] = static_cast<float>(v.x), bp.vy[i] = static_cast<float>(v.y), bp.vz[i] = static_cast<float>(v.z);
-    }
-  }
+  detail::set_body_particle_velocities(m_);
 }
 
 void CpuSolver::set_device_state(std::size_t device, const DeviceState& state) {
@@ -83,40 +66,13 @@ double CpuSolver::stable_time_step() const {
   return std::min(dt, p.max_dt_s);
 }
 
-int CpuSolver::advance(double duration_s, const std::function<void(double)>& before_substep) {
-  if (duration_s <= 0) return 0;
-  const double dt_max = stable_time_step();
-  const int substeps = std::max(1, static_cast<int>(std::ceil(duration_s / dt_max - 1e-9)));
-  const double dt = duration_s / substeps;
-  const double t0 = time_s_;
-  for (int i = 0; i < substeps; ++i) {
-    if (before_substep) before_substep(t0 + i * dt);
-    step(dt);
-  }
-  return substeps;
-}
-
 void CpuSolver::sort_fluid() {
   FluidParticles& f = m_.fluid;
   fluid_sort_.sort(m_.params.grid, f.x.data(), f.y.data(), f.z.data(), f.size());
   f.permute(fluid_sort_.order);
 }
 
-void CpuSolver::build_body_view() {
-  const BodyParticles& bp = m_.body_particles;
-  body_sort_.sort(m_.params.grid, bp.x.data(), bp.y.data(), bp.z.data(), bp.size());
-  SortedSolids& v = body_view_;
-  v.resize(bp.size());
-  for (std::size_t k = 0; k < bp.size(); ++k) {
-    const std::uint32_t i = body_sort_.order[k];
-    v.x[k] = bp.x[i], v.y[k] = bp.y[i], v.z[k] = bp.z[i];
-    v.vx[k] = bp.vx[i], v.vy[k] = bp.vy[i], v.vz[k] = bp.vz[i];
-    v.volume[k] = bp.volume[i], v.viscosity[k] = bp.viscosity[i], v.no_slip[k] = 1.0f;
-    v.body[k] = bp.body[i];
-    v.source[k] = i;
-  }
-  v.cell_start = body_sort_.cell_start;
-}
+void CpuSolver::build_body_view() { detail::sort_body_view(m_.params.grid, m_.body_particles, body_sort_, body_view_); }
 
 // Eq. 2 over fluid neighbours, plus the boundary contribution rho0 V_b W of wall and body
 // particles (Akinci et al. 2012), then eq. 7. Negative pressures are clamped to zero: a free
@@ -126,34 +82,8 @@ void CpuSolver::compute_density(std::size_t begin, std::size_t end, int worker) 
                        neighbour_lists_[worker], neighbour_ranges_.data());
 }
 
-// Rigid particles have constant density (§4.1); what they get here is the contact pressure
-// from other solids: k rho0 sum_c V_c W over particles of other bodies and walls. It is zero
-// when the body touches nothing and makes body<->body and body<->wall contacts push apart with
-// the same pressure force as the fluid.
-void CpuSolver::compute_body_contact_pressure(std::size_t begin, std::size_t end) {
-  const SimulationParams& p = m_.params;
-  const SortedSolids& st = m_.static_solids;
-  SortedSolids& bv = body_view_;
-  for (std::size_t k = begin; k < end; ++k) {
-    const float xi = bv.x[k], yi = bv.y[k], zi = bv.z[k];
-    const std::int32_t own = bv.body[k];
-    float sum = 0;
-    for_each_neighbour_run(p.grid, st.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      sum += poly6_run_weighted(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), b, e, xi, yi, zi, p.kernel);
-    });
-    for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t j = b; j < e; ++j) {
-        if (bv.body[j] == own) continue;
-        const float dx = xi - bv.x[j], dy = yi - bv.y[j], dz = zi - bv.z[j];
-        sum += bv.volume[j] * poly6_shape(p.kernel, dx * dx + dy * dy + dz * dz);
-      }
-    });
-    const float pressure = p.stiffness * p.rest_density_kg_m3 * p.kernel.poly6 * sum;
-    bv.pressure[k] = pressure;
-    m_.body_particles.pressure[bv.source[k]] = pressure;
-  }
-}
-
+// Rigid particles have constant density (§4.1); what they get is the contact pressure from
+// other solids (body_contacts.hpp), the same force law as the fluid's pressure.
 // Forces on fluid particles (Algorithm 1, lines 4-12). With V = m / rho:
 //   pressure (eq. 5): f_p = -(V_p / c_p) sum_i (V_i / c_i) (P_p + P_i) grad W
 //   viscosity (eqs. 6, 9): f_p = V_p sum_i V_i (mu_p + mu_i) / 2 (v_i - v_p) lap W
@@ -174,16 +104,12 @@ void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int wor
 void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end) {
   const SimulationParams& p = m_.params;
   const FluidParticles& f = m_.fluid;
-  const SortedSolids& st = m_.static_solids;
-  const SortedSolids& bv = body_view_;
   BodyParticles& bp = m_.body_particles;
   const KernelConstants& k = p.kernel;
-  const float damping_scale = p.contact_damping_pa_s;
   for (std::size_t i = begin; i < end; ++i) {
     const float xi = bp.x[i], yi = bp.y[i], zi = bp.z[i];
     const float vxi = bp.vx[i], vyi = bp.vy[i], vzi = bp.vz[i];
-    const float vol = bp.volume[i], mui = bp.viscosity[i], pb = bp.pressure[i];
-    const std::int32_t own = bp.body[i];
+    const float vol = bp.volume[i], mui = bp.viscosity[i];
     float fx = 0, fy = 0, fz = 0;
     for_each_neighbour_run(p.grid, fluid_sort_.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
       for (std::uint32_t j = b; j < e; ++j) {
@@ -203,75 +129,8 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
     bp.fx[i] = fx * vol;
     bp.fy[i] = fy * vol;
     bp.fz[i] = fz * vol;
-    float cx = 0, cy = 0, cz = 0;
-    for_each_neighbour_run(p.grid, st.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t j = b; j < e; ++j) {
-        const float dx = xi - st.x[j], dy = yi - st.y[j], dz = zi - st.z[j];
-        const float r2 = dx * dx + dy * dy + dz * dz;
-        if (r2 >= k.h2 || r2 <= 0) continue;
-        const float r = std::sqrt(r2);
-        const float hr = k.h - r;
-        const float dvx = st.vx[j] - vxi, dvy = st.vy[j] - vyi, dvz = st.vz[j] - vzi;
-        const float damping = contact_viscous_pressure(damping_scale, -(dvx * dx + dvy * dy + dvz * dz), r2, k.h2);
-        const float pterm = -st.volume[j] * (pb + pb + damping) * spiky_grad_factor(k, r, hr);
-        const float vterm = st.volume[j] * 0.5f * (st.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
-        cx += pterm * dx + vterm * dvx;
-        cy += pterm * dy + vterm * dvy;
-        cz += pterm * dz + vterm * dvz;
-      }
-    });
-    for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t j = b; j < e; ++j) {
-        if (bv.body[j] == own) continue;
-        const float dx = xi - bv.x[j], dy = yi - bv.y[j], dz = zi - bv.z[j];
-        const float r2 = dx * dx + dy * dy + dz * dz;
-        if (r2 >= k.h2 || r2 <= 0) continue;
-        const float r = std::sqrt(r2);
-        const float hr = k.h - r;
-        const float dvx = bv.vx[j] - vxi, dvy = bv.vy[j] - vyi, dvz = bv.vz[j] - vzi;
-        const float damping = contact_viscous_pressure(damping_scale, -(dvx * dx + dvy * dy + dvz * dz), r2, k.h2);
-        const float pterm = -bv.volume[j] * (pb + bv.pressure[j] + damping) * spiky_grad_factor(k, r, hr);
-        const float vterm = bv.volume[j] * 0.5f * (bv.viscosity[j] + mui) * viscosity_laplacian_of(k, hr);
-        cx += pterm * dx + vterm * dvx;
-        cy += pterm * dy + vterm * dvy;
-        cz += pterm * dz + vterm * dvz;
-      }
-    });
-    bp.cx[i] = cx * vol;
-    bp.cy[i] = cy * vol;
-    bp.cz[i] = cz * vol;
   }
-}
-
-// Algorithm 2: per body, sum particle forces and torques (eqs. 10-12, in double, in particle
-// order), add gravity and the couplings, integrate, then place the particles (eq. 14).
-void CpuSolver::step_bodies(double dt) {
-  BodyParticles& bp = m_.body_particles;
-  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
-    RigidBody& body = m_.bodies[b];
-    if (!body.dynamic) continue;
-    Vec3 ff, ft, cf, ct;
-    for (std::uint32_t i = body.first_particle; i < body.first_particle + body.particle_count; ++i) {
-      const Vec3 arm = Vec3{bp.x[i], bp.y[i], bp.z[i]} - body.position;
-      const Vec3 fluid{bp.fx[i], bp.fy[i], bp.fz[i]}, contact{bp.cx[i], bp.cy[i], bp.cz[i]};
-      ff += fluid;
-      ft += cross(arm, fluid);
-      cf += contact;
-      ct += cross(arm, contact);
-    }
-    body.fluid_force = ff, body.fluid_torque = ft, body.contact_force = cf, body.contact_torque = ct;
-    integrate_body(body, couplings_of_body_[b], devices_, m_.params.gravity_m_s2, dt);
-  }
-  if (bp.size() == 0) return;
-  pool_.parallel_for(bp.size(), [&](std::size_t begin, std::size_t end, int) {
-    for (std::size_t i = begin; i < end; ++i) {
-      const RigidBody& body = m_.bodies[bp.body[i]];
-      const Vec3 world = body.position + rotate(body.orientation, Vec3{bp.rx[i], bp.ry[i], bp.rz[i]});
-      const Vec3 v = body.velocity_at(world);
-      bp.x[i] = static_cast<float>(world.x), bp.y[i] = static_cast<float>(world.y), bp.z[i] = static_cast<float>(world.z);
-      bp.vx[i] = static_cast<float>(v.x), bp.vy[i] = static_cast<float>(v.y), bp.vz[i] = static_cast<float>(v.z);
-    }
-  });
+  detail::body_contact_forces(p, m_.static_solids, body_view_, bp, begin, end);
 }
 
 // Leap-frog (Algorithm 1, lines 13-16): v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.
@@ -319,7 +178,9 @@ void CpuSolver::step(double dt) {
   neighbour_ranges_.resize(m_.fluid.size());
   pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_density(b, e, w); });
   if (body_view_.size() > 0)
-    pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) { compute_body_contact_pressure(b, e); });
+    pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
+      detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, m_.body_particles, b, e);
+    });
   times_.density_s += seconds_since(t0);
 
   t0 = Clock::now();
@@ -330,7 +191,7 @@ void CpuSolver::step(double dt) {
   times_.forces_s += seconds_since(t0);
 
   t0 = Clock::now();
-  step_bodies(dt);
+  detail::step_bodies(m_, couplings_of_body_, devices_, dt, pool_);
   times_.bodies_s += seconds_since(t0);
 
   t0 = Clock::now();
@@ -344,5 +205,10 @@ void CpuSolver::step(double dt) {
 }
 
 void CpuSolver::check_finite() const { check_finite_state(m_, time_s_); }
+
+ComputeDevice CpuSolver::device() const {
+  const int n = threads();
+  return {std::to_string(n) + (n == 1 ? " CPU thread" : " CPU threads"), "host", ""};
+}
 
 }  // namespace hapfluid::sim

@@ -94,6 +94,33 @@ double lattice_particle_mass(double rest_density, double spacing, double h) {
   return rest_density / sum;
 }
 
+double cubic_lattice_particle_mass(double rest_density, double spacing, double h) {
+  const int reach = static_cast<int>(std::ceil(h / spacing));
+  double sum = 0;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -reach; k <= reach; ++k)
+        sum += cubic_w_d(spacing * std::sqrt(static_cast<double>(i * i + j * j + k * k)), h);
+  return rest_density / sum;
+}
+
+double cubic_lattice_gradient_moment(double spacing, double h) {
+  // sum_j V (z_j - z_i) dW/dz_i over a cubic lattice with V = 1 / sum_j W (the lattice volume at
+  // rest density): 1 for an exact gradient, 1.020 for the cubic spline at h = 2 spacings.
+  const int reach = static_cast<int>(std::ceil(h / spacing));
+  double sum = 0, weights = 0;
+  for (int i = -reach; i <= reach; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -reach; k <= reach; ++k) {
+        const double r = spacing * std::sqrt(static_cast<double>(i * i + j * j + k * k));
+        weights += cubic_w_d(r, h);
+        if (r <= 0 || r >= h) continue;
+        const double z = k * spacing;
+        sum += z * cubic_dw_dr_d(r, h) * z / r;
+      }
+  return -sum / weights;
+}
+
 double lattice_gradient_moment(double spacing, double h) {
   // sum_j V (z_j - z_i) dW/dz_i over a cubic lattice: 1 for an exact gradient, about 0.956 for
   // the spiky kernel at h = 2 spacings.
@@ -116,6 +143,8 @@ SimulationModel build_model(const config::Scene& scene) {
   SimulationParams& p = model.params;
   const double h = scene.support_radius();
   const double s = scene.fluid.particle_spacing_m;
+  const bool incompressible = scene.fluid.solver == config::PressureSolver::dfsph;
+  p.solver = scene.fluid.solver;
   p.kernel = make_kernel_constants(h);
   // The spiky gradient is scaled so that the pressure gradient estimate is exact on the rest
   // lattice (as the particle mass is chosen so that the density is): without it the fluid at
@@ -126,13 +155,25 @@ SimulationModel build_model(const config::Scene& scene) {
   p.speed_of_sound_m_s = std::sqrt(p.stiffness);
   p.contact_damping_pa_s = static_cast<float>(contact_damping_scale(p.rest_density_kg_m3, p.speed_of_sound_m_s, h));
   p.particle_spacing_m = static_cast<float>(s);
-  p.fluid_particle_mass_kg = static_cast<float>(lattice_particle_mass(scene.fluid.rest_density_kg_m3, s, h));
+  p.fluid_particle_mass_kg = static_cast<float>(incompressible ? cubic_lattice_particle_mass(scene.fluid.rest_density_kg_m3, s, h)
+                                                               : lattice_particle_mass(scene.fluid.rest_density_kg_m3, s, h));
+  if (incompressible) {
+    IncompressibleParams& ip = p.incompressible;
+    ip.kernel = make_cubic_kernel(h, cubic_lattice_gradient_moment(s, h));
+    ip.max_density_error = static_cast<float>(scene.fluid.density_error_percent / 100.0);
+    ip.max_divergence_error = static_cast<float>(scene.fluid.divergence_error_percent / 100.0);
+    ip.max_iterations = scene.fluid.max_solver_iterations;
+    ip.xsph_fraction = static_cast<float>(scene.fluid.xsph_fraction);
+  }
   p.fluid_viscosity_pa_s = static_cast<float>(scene.fluid.viscosity_pa_s);
   p.gravity_m_s2 = from_config(scene.fluid.gravity_m_s2);
   const auto& box = scene.domain.box;
   const double lo[3] = {box.min_m.x, box.min_m.y, box.min_m.z}, hi[3] = {box.max_m.x, box.max_m.y, box.max_m.z};
   float glo[3], ghi[3];
-  const double margin = (scene.domain.boundary_layers + 1) * s;
+  // dfsph: the fluid sees the walls through their volume map (wall_map.hpp); one layer of wall
+  // particles remains for body contacts and the outputs.
+  const int wall_layers = incompressible ? 1 : scene.domain.boundary_layers;
+  const double margin = (wall_layers + 1) * s;
   for (int a = 0; a < 3; ++a) {
     p.box_lo[a] = static_cast<float>(lo[a]);
     p.box_hi[a] = static_cast<float>(hi[a]);
@@ -155,12 +196,12 @@ SimulationModel build_model(const config::Scene& scene) {
   std::vector<SolidSource> static_sources;
   {
     SolidSource walls;
-    walls.positions = wall_particle_positions(scene.domain, s);
+    walls.positions = wall_particle_positions(scene.domain, s, wall_layers);
     // Wall layers lie on a continuation of the fluid's rest lattice. When they are at least h
     // thick a fluid particle sees a complete lattice across the wall, so each wall particle
     // stands for exactly the lattice volume m / rho0. Thinner walls use Akinci's volumes,
     // which enlarge the first layer to make up for the missing ones.
-    if (scene.domain.boundary_layers * s >= h * (1 - 1e-9))
+    if (wall_layers * s >= h * (1 - 1e-9))
       walls.volumes.assign(walls.positions.size(), p.fluid_particle_mass_kg / p.rest_density_kg_m3);
     else
       walls.volumes = boundary_volumes(walls.positions, p.kernel);
@@ -212,7 +253,8 @@ SimulationModel build_model(const config::Scene& scene) {
     world.reserve(samples.size());
     for (const Vec3& x : samples) world.push_back(origin + r * x);
     if (cb.dynamic) check_clear_of_walls(scene, cb.name, world, s);
-    std::vector<float> volumes = boundary_volumes(world, p.kernel);
+    std::vector<float> volumes =
+        incompressible ? boundary_volumes(world, p.incompressible.kernel) : boundary_volumes(world, p.kernel);
 
     RigidBody body;
     body.name = cb.name;
@@ -278,7 +320,8 @@ SimulationModel build_model(const config::Scene& scene) {
     // g d / c^2) at depth d, eq. 7): a lattice at rest density would first fall by g H / c^2 of
     // its height and ring, scrambling the lattice. z' = zb + u - (g / c^2) (H u - u^2 / 2), u = z - zb.
     const double g_down = p.gravity_m_s2.x == 0 && p.gravity_m_s2.y == 0 && p.gravity_m_s2.z < 0 ? -p.gravity_m_s2.z : 0.0;
-    const double squeeze = g_down / static_cast<double>(p.stiffness);
+    // (The incompressible solver starts at rest density.)
+    const double squeeze = incompressible ? 0.0 : g_down / static_cast<double>(p.stiffness);
     auto hydrostatic_height = [&](double zb, double zt, double z) {
       const double u = z - zb, height = zt - zb;
       return zb + u - squeeze * (height * u - 0.5 * u * u);

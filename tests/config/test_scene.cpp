@@ -225,3 +225,22 @@ TEST(Scene, WorkspaceCentreDefaultsToTheHandsStart) {
   expect_problem(kBase + kHand + "workspace_centre_m = [0.1, 0.15]\n",
                  "devices.hand.workspace_centre_m = [0.1, 0.15]: must be an array of 3 finite numbers");
 }
+
+// The pressure solver is named in the scene; its own keys are refused on the other method, so a
+// tolerance that would silently do nothing is reported.
+TEST(SceneFile, SolverKeyChoosesTheMethodAndItsKeysBelongToIt) {
+  EXPECT_EQ(parse_scene(kBase, kScenePath).fluid.solver, PressureSolver::wcsph);
+  std::string dfsph = kBase;
+  dfsph.replace(dfsph.find("[fluid]\n"), 8, "[fluid]\nsolver = \"dfsph\"\ndensity_error_percent = 0.05\n");
+  const Scene s = parse_scene(dfsph, kScenePath);
+  EXPECT_EQ(s.fluid.solver, PressureSolver::dfsph);
+  EXPECT_DOUBLE_EQ(s.fluid.density_error_percent, 0.05);
+  EXPECT_DOUBLE_EQ(s.time.cfl, TimeStepping::kDefaultCflDfsph);
+  std::string unknown = kBase;
+  unknown.replace(unknown.find("[fluid]\n"), 8, "[fluid]\nsolver = \"sph\"\n");
+  expect_problem(unknown, "fluid.solver");
+  expect_problem(unknown, "\"dfsph\"");
+  std::string misplaced = kBase;
+  misplaced.replace(misplaced.find("[fluid]\n"), 8, "[fluid]\nxsph_fraction = 0.05\n");
+  expect_problem(misplaced, "fluid.xsph_fraction = 0.05: applies to solver = \"dfsph\" only");
+}

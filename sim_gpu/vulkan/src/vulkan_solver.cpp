@@ -59,6 +59,10 @@ struct VulkanSolver::Buffers {
 };
 
 VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& options) : m_(std::move(model)) {
+  if (m_.params.solver != config::PressureSolver::wcsph)
+    throw std::runtime_error(m_.scene_name + ": the Vulkan backend runs fluid.solver = \"wcsph\" only, this scene uses \"" +
+                             std::string(config::to_string(m_.params.solver)) +
+                             "\" (run it with --backend cpu, or set fluid.solver = \"wcsph\")");
   context_ = std::make_unique<Context>(options.context);
   program_ = std::make_unique<ComputeProgram>(*context_);
   devices_.resize(m_.devices.size());

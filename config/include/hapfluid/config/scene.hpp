@@ -33,7 +33,14 @@ struct FluidBlock {
 // Visual preset for the renderer (§5, eq. 15): colour and wavelength-dependent extinction.
 enum class FluidLook { water, batter, honey, syrup };
 
+// The pressure solver. wcsph: the paper's weakly compressible state equation (eq. 7), time step
+// from the speed of sound; the reference, and the default. dfsph: incompressible,
+// divergence-free plus constant-density solves (Bender & Koschier 2017), time step from the flow
+// velocity; experimental (sim_gpu/README.md says what does not hold yet).
+enum class PressureSolver { wcsph, dfsph };
+
 struct Fluid {
+  PressureSolver solver = PressureSolver::wcsph;
   double rest_density_kg_m3 = 1000.0;
   double particle_spacing_m = 0.02;
   double support_radius_m = 0.0;   // h; 0: derived as 2 * particle_spacing_m
@@ -42,18 +49,37 @@ struct Fluid {
   double stiffness_pa = 0.0;       // k, in Pa per (kg/m^3) -> effectively m^2/s^2
   double speed_of_sound_m_s = 0.0;
   double viscosity_pa_s = 0.001;   // mu
+  // dfsph: the solves iterate until the mean density error (constant-density solve) and the
+  // mean density change over one step (divergence-free solve) are below these, in percent of
+  // the rest density.
+  double density_error_percent = 0.1;
+  double divergence_error_percent = 0.1;
+  int max_solver_iterations = 100;
+  // XSPH velocity smoothing (Monaghan 1989): each step a particle's velocity moves this fraction
+  // of the way to its neighbours' kernel-weighted mean. A numerical damping of particle noise,
+  // not a physical viscosity; 0 disables it.
+  double xsph_fraction = 0.0;
   Vec3 gravity_m_s2{0, 0, -9.81};
   std::vector<FluidBlock> blocks;
   FluidLook look = FluidLook::water;
 
+  // wcsph: k of eq. 7. dfsph: the stiffness of body-body and body-wall contacts only (the fluid is
+  // incompressible); without speed_of_sound_m_s or stiffness_pa it is kDefaultContactSpeed_m_s^2.
   double effective_stiffness() const {
-    return stiffness_pa > 0 ? stiffness_pa : speed_of_sound_m_s * speed_of_sound_m_s;
+    if (stiffness_pa > 0) return stiffness_pa;
+    if (speed_of_sound_m_s > 0) return speed_of_sound_m_s * speed_of_sound_m_s;
+    return kDefaultContactSpeed_m_s * kDefaultContactSpeed_m_s;
   }
+  static constexpr double kDefaultContactSpeed_m_s = 10.0;
 };
 
 struct TimeStepping {
   double dt_s = 0.0;             // fixed step; 0: from the CFL bound
-  double cfl = 0.15;             // dt = cfl * h / (c + v_max), h the support radius; also bounded by viscosity/force limits
+  // wcsph: dt = cfl * h / (c + v_max), h the support radius; dfsph: dt = cfl * d / v_max, d the
+  // particle spacing. Both are also bounded by the viscosity, force and contact limits. 0 until
+  // loaded: the default depends on the solver (kDefaultCflWcsph, kDefaultCflDfsph).
+  double cfl = 0.0;
+  static constexpr double kDefaultCflWcsph = 0.15, kDefaultCflDfsph = 0.4;
   double max_dt_s = 0.002;
   double frame_rate_hz = 60.0;   // published frames (and batch exports); several substeps per frame
 };
@@ -118,6 +144,7 @@ Scene load_scene(const std::filesystem::path& file);
 Scene parse_scene(const std::string& toml_text, const std::filesystem::path& file_for_messages);
 
 const char* to_string(FluidLook);
+const char* to_string(PressureSolver);
 const char* to_string(DeviceSource);
 
 }  // namespace hapfluid::config

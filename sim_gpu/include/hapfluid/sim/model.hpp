@@ -8,6 +8,7 @@
 #include "hapfluid/config/motion.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/coupling.hpp"
+#include "hapfluid/sim/cubic_kernel.hpp"
 #include "hapfluid/sim/kernels.hpp"
 #include "hapfluid/sim/math.hpp"
 #include "hapfluid/sim/neighbour_grid.hpp"
@@ -16,7 +17,22 @@
 
 namespace hapfluid::sim {
 
+// What the incompressible solver (dfsph) needs beyond the common parameters.
+struct IncompressibleParams {
+  CubicKernel kernel;
+  float max_density_error = 0.001f;     // mean (rho* - rho0) / rho0 at which the density solve stops
+  float max_divergence_error = 0.001f;  // mean |D rho / Dt| dt / rho0 at which the divergence solve stops
+  int min_iterations = 2;
+  int max_iterations = 100;
+  float xsph_fraction = 0;              // fluid.xsph_fraction
+  // Fewer neighbours than this: a particle at the free surface, left out of the divergence solve
+  // (its neighbourhood is too thin for a divergence estimate; it would pull the surface apart).
+  int min_divergence_neighbours = 20;
+};
+
 struct SimulationParams {
+  config::PressureSolver solver = config::PressureSolver::wcsph;
+  IncompressibleParams incompressible;  // solver = dfsph
   KernelConstants kernel;
   float rest_density_kg_m3 = 1000;
   float stiffness = 0;            // k of eq. 7 (= c^2), m^2/s^2
@@ -63,6 +79,10 @@ SimulationModel build_model(const config::Scene& scene);
 // Mass of one fluid particle such that a cubic lattice of the given spacing has exactly the rest
 // density under the poly6 sum of eq. 2.
 double lattice_particle_mass(double rest_density, double spacing, double support_radius);
+
+// The same two for the cubic spline of the incompressible solver (cubic_kernel.hpp).
+double cubic_lattice_particle_mass(double rest_density, double spacing, double support_radius);
+double cubic_lattice_gradient_moment(double spacing, double support_radius);
 
 // First moment sum_j V_j (z_j - z_i) dW/dz of the spiky gradient over a cubic lattice (1 for an
 // exact gradient estimate).

@@ -33,6 +33,9 @@ struct FluidParticles {
   // volume * volume_correction (1 on the rest lattice).
   std::vector<float> volume_correction;
   std::vector<float> viscosity;   // per-particle mu, Pa s (eq. 9)
+  // dfsph warm start: the last step's pressure stiffness of the constant-density solve times dt^2
+  // and of the divergence-free solve times dt (both then independent of the step size).
+  std::vector<float> density_stiffness_dt2, divergence_stiffness_dt;
   std::vector<std::uint32_t> id;  // creation index, unchanged by sorting
 
   std::size_t size() const { return x.size(); }

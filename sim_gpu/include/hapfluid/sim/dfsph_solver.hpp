@@ -1,0 +1,124 @@
+// The incompressible CPU solver: Divergence-Free SPH (Bender & Koschier, SCA 2015 and TVCG 2017)
+// in the unified particle model of the paper (rigid bodies as boundary particles, eqs. 8-14,
+// devices through the implicit virtual coupling of coupling.hpp).
+//
+// One step of dt:
+//  1. sort the fluid by cell; neighbour lists with V_j grad W_ij and V_j W_ij per pair, built
+//     once and read by every solver iteration; density and the DFSPH factor
+//     1 / (|sum_j V_j grad W_ij|^2 + sum_fluid |V_j grad W_ij|^2) (normalised density rho/rho0);
+//  2. divergence-free solve on the current velocities (D rho / Dt = 0), warm-started with half of
+//     the last step's stiffness;
+//  3. non-pressure accelerations: gravity, viscosity (the SPH Laplacian of Monaghan 2005 with the
+//     fluid's and each body's viscosity, eq. 9's pairing) and the scene's XSPH fraction;
+//  4. constant-density solve on the predicted velocities (rho* = rho0), warm-started likewise;
+//  5. bodies: the pressure and viscous forces the fluid received from each body particle, with
+//     the opposite sign (two-way coupling, Akinci et al. 2012), plus contacts; Algorithm 2;
+//  6. positions x += dt v; a particle that still reaches a wall is clamped and counted (a fault).
+// The domain walls enter through a volume map (wall_map.hpp); static and dynamic bodies as
+// boundary particles with their Akinci volumes Psi_b: rho_i += Psi_b W_ib, and the fluid's
+// pressure pushes on them with its own stiffness.
+//
+// Work is split statically over a ThreadPool (bit-for-bit repeatable for a thread count); nothing
+// is allocated per step once the lists have grown to the scene's neighbourhood size.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/neighbour_grid.hpp"
+#include "hapfluid/sim/solver.hpp"
+#include "hapfluid/sim/thread_pool.hpp"
+#include "hapfluid/sim/wall_map.hpp"
+
+namespace hapfluid::sim {
+
+namespace detail {
+
+// Pairs of the fluid particles of one worker: fluid neighbours, then static solid, then dynamic
+// body neighbours of each particle.
+struct PairLists {
+  std::vector<std::uint32_t> index;
+  std::vector<float> gx, gy, gz;  // V_j grad W(x_i - x_j), 1/m (V_j = m / rho0, or Psi_b)
+  std::vector<float> w;           // V_j W(x_i - x_j)
+  std::size_t used = 0;
+  void reserve(std::size_t n);
+};
+
+struct PairRange {
+  std::uint32_t offset = 0;
+  std::uint16_t fluid = 0, statics = 0, bodies = 0;
+};
+
+// Per fluid particle, in sorted order, recomputed every step.
+struct DfsphFields {
+  std::vector<float> density_hat;        // rho / rho0
+  std::vector<float> factor;             // DFSPH factor, m^2
+  std::vector<float> solid_gx, solid_gy, solid_gz;  // sum over solids of Psi_b grad W_ib, 1/m
+  std::vector<float> solid_flux;         // sum over body particles of Psi_b grad W_ib . v_b, 1/s
+  std::vector<float> stiffness_step;     // this iteration's stiffness increment, m^2/s^2
+  std::vector<float> density_stiffness, divergence_stiffness;  // this step's totals, m^2/s^2
+  std::vector<std::uint16_t> neighbours;
+  void resize(std::size_t n);
+};
+
+}  // namespace detail
+
+class DfsphSolver final : public Solver {
+ public:
+  DfsphSolver(SimulationModel model, int threads);
+
+  const SimulationModel& model() const override { return m_; }
+  double time_s() const override { return time_s_; }
+  std::uint64_t steps() const override { return steps_; }
+  int threads() const override { return pool_.size(); }
+  PhaseTimes phase_times() const override { return times_; }
+  SolverIterations iterations() const override { return iterations_; }
+  std::uint64_t clamped_particle_count() const override { return clamped_; }
+
+  void set_device_state(std::size_t device, const DeviceState& state) override;
+  // cfl * particle spacing / fastest fluid or body particle; the explicit viscosity's diffusion
+  // limit; the contact stiffness while bodies touch other solids; the scene's max_dt_s.
+  double stable_time_step() const override;
+  void step(double dt) override;
+
+  void sync_and_check_finite() override;
+  const char* backend() const override { return "cpu"; }
+  ComputeDevice device() const override;
+
+ private:
+  void sort_and_build_pairs();
+  void divergence_solve(float dt);
+  void non_pressure_forces(float dt);
+  void density_solve(float dt);
+  void body_forces_and_step(double dt);
+  void integrate_positions(float dt);
+  // One solve: iterations until the mean error is below `tolerance`; returns iterations.
+  template <class Rate>
+  int solve(float dt, bool density, float tolerance, Rate&& rate);
+
+  SimulationModel m_;
+  ThreadPool pool_;
+  CellSort fluid_sort_, body_sort_;
+  SortedSolids body_view_;
+  // The fluid's static solids: the static bodies' particles. The domain walls are the volume map
+  // (their particles stay in the model for body contacts and outputs).
+  SortedSolids fluid_statics_;
+  WallMap walls_;
+  std::vector<DeviceState> devices_;
+  std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
+  std::vector<detail::PairLists> lists_;  // one per worker
+  std::vector<detail::PairRange> ranges_;
+  detail::DfsphFields fields_;
+  std::vector<double> worker_error_;
+  std::vector<std::uint64_t> worker_clamped_;
+  std::vector<char> worker_touching_;
+  bool bodies_touching_ = false;
+  double time_s_ = 0;
+  std::uint64_t steps_ = 0;
+  std::uint64_t clamped_ = 0;
+  PhaseTimes times_;
+  SolverIterations iterations_;
+};
+
+}  // namespace hapfluid::sim

@@ -1,0 +1,46 @@
+// The domain box's walls as continuous solids for the incompressible solver: a volume map in the
+// sense of Bender et al. 2019 ("Volume maps: an implicit boundary representation for SPH"),
+// which for a plane is a function of the distance alone. A fluid particle at distance d from a
+// wall gets the wall's share of its density, the kernel integrated over the half-space behind
+// the wall, and the gradient of that share; no wall particles take part in the fluid's step.
+// A continuous wall has no gaps between boundary particles for the fluid to be pressed into,
+// and no lattice for the fluid's first layer to slide over.
+//
+// Two calibrations make a fluid lattice start exactly at rest: the wall surface sits `offset_m`
+// behind the box face so that a particle of the first layer (half a spacing from the face) has
+// exactly the rest density, and the gradient is scaled so that its pair gradients and the wall's
+// cancel there, as they do in the bulk. Edges and corners add the walls' shares (the overlap of
+// two half-spaces, at most a few percent of a density at an edge, is counted twice).
+#pragma once
+
+#include <vector>
+
+#include "hapfluid/sim/cubic_kernel.hpp"
+
+namespace hapfluid::sim {
+
+struct WallMap {
+  bool enabled[6] = {false, false, false, false, false, false};  // x_min, x_max, y_min, y_max, floor, ceiling
+  float face[6] = {0, 0, 0, 0, 0, 0};                              // the box face, m
+  float offset_m = 0;
+  float gradient_scale = 1;
+  float h = 0;
+  // Tables over u = d + offset in [-h, h] (d the distance from the face into the fluid):
+  // share of density (rho / rho0) and the magnitude of its gradient, 1/m.
+  std::vector<float> share, slope;
+  float du = 0;
+
+  bool any() const {
+    for (bool e : enabled)
+      if (e) return true;
+    return false;
+  }
+  // Adds the walls' density share and its gradient (pointing into the walls) at a position.
+  void sample(float x, float y, float z, float& density_hat, float& gx, float& gy, float& gz) const;
+};
+
+// The map of the enabled walls of a box, for the cubic kernel and fluid lattice spacing given.
+WallMap make_wall_map(const float box_lo[3], const float box_hi[3], const bool low_wall[3], const bool high_wall[3],
+                      const CubicKernel& kernel, double spacing_m);
+
+}  // namespace hapfluid::sim

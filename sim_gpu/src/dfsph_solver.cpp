@@ -1,0 +1,333 @@
+#include "hapfluid/sim/dfsph_solver.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "body_contacts.hpp"
+#include "body_step.hpp"
+#include "dfsph_passes.hpp"
+#include "hapfluid/sim/finite_state.hpp"
+
+namespace hapfluid::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Warm start: half of the last step's stiffness (Bender & Koschier 2017 start from it; the half
+// keeps a solve that overshot last step from ringing).
+constexpr float kWarmStartFraction = 0.5f;
+
+}  // namespace
+
+DfsphSolver::DfsphSolver(SimulationModel model, int threads) : m_(std::move(model)), pool_(threads) {
+  if (m_.params.solver != config::PressureSolver::dfsph)
+    throw std::invalid_argument("DfsphSolver: the model was built for solver = \"wcsph\"");
+  devices_.resize(m_.devices.size());
+  for (std::size_t d = 0; d < m_.devices.size(); ++d)
+    devices_[d] = device_state_from(config::evaluate_motion(m_.devices[d].motion, 0.0));
+  couplings_of_body_.resize(m_.bodies.size());
+  for (auto& c : m_.couplings) couplings_of_body_[c.body].push_back(&c);
+  lists_.resize(threads);
+  // Room for the neighbourhood of a particle in the bulk (about 34 at h = 2 spacings) plus its
+  // solids, so that the lists do not grow during the first steps.
+  const std::size_t per_particle = 64;
+  for (int w = 0; w < threads; ++w) {
+    std::size_t b, e;
+    ThreadPool::chunk(m_.fluid.size(), threads, w, b, e);
+    lists_[w].reserve((e - b) * per_particle + 4096);
+  }
+  ranges_.resize(m_.fluid.size());
+  fields_.resize(m_.fluid.size());
+  worker_error_.assign(threads, 0);
+  worker_clamped_.assign(threads, 0);
+  worker_touching_.assign(threads, 0);
+  detail::set_body_particle_velocities(m_);
+  const SimulationParams& p = m_.params;
+  bool low[3], high[3];
+  for (int a = 0; a < 3; ++a) low[a] = p.clamp_lo[a] < p.box_lo[a], high[a] = p.clamp_hi[a] > p.box_hi[a];
+  walls_ = make_wall_map(p.box_lo, p.box_hi, low, high, p.incompressible.kernel, p.particle_spacing_m);
+  {
+    const SortedSolids& st = m_.static_solids;
+    std::vector<std::uint32_t> keep;
+    for (std::uint32_t k = 0; k < st.size(); ++k)
+      if (st.body[k] != kWall) keep.push_back(k);
+    std::vector<float> x(keep.size()), y(keep.size()), z(keep.size());
+    for (std::size_t q = 0; q < keep.size(); ++q) x[q] = st.x[keep[q]], y[q] = st.y[keep[q]], z[q] = st.z[keep[q]];
+    CellSort sort;
+    sort.sort(p.grid, x.data(), y.data(), z.data(), keep.size());
+    fluid_statics_.resize(keep.size());
+    for (std::size_t q = 0; q < keep.size(); ++q) {
+      const std::uint32_t k = keep[sort.order[q]];
+      fluid_statics_.x[q] = st.x[k], fluid_statics_.y[q] = st.y[k], fluid_statics_.z[q] = st.z[k];
+      fluid_statics_.vx[q] = fluid_statics_.vy[q] = fluid_statics_.vz[q] = 0;
+      fluid_statics_.volume[q] = st.volume[k], fluid_statics_.viscosity[q] = st.viscosity[k];
+      fluid_statics_.no_slip[q] = st.no_slip[k], fluid_statics_.pressure[q] = 0;
+      fluid_statics_.body[q] = st.body[k], fluid_statics_.source[q] = st.source[k];
+    }
+    fluid_statics_.cell_start = sort.cell_start;
+  }
+  // Density and pressure of the initial state, for a frame exported before the first step.
+  sort_and_build_pairs();
+  for (std::size_t i = 0; i < m_.fluid.size(); ++i) {
+    m_.fluid.density[i] = fields_.density_hat[i] * m_.params.rest_density_kg_m3;
+    m_.fluid.volume[i] = m_.params.fluid_particle_mass_kg / m_.fluid.density[i];
+  }
+}
+
+void DfsphSolver::set_device_state(std::size_t device, const DeviceState& state) {
+  if (device >= devices_.size())
+    throw std::out_of_range("device index " + std::to_string(device) + " out of range (" +
+                            std::to_string(devices_.size()) + " devices in the scene)");
+  devices_[device] = state;
+}
+
+double DfsphSolver::stable_time_step() const {
+  const SimulationParams& p = m_.params;
+  if (p.fixed_dt_s > 0) return p.fixed_dt_s;
+  float v2 = 0;
+  const FluidParticles& f = m_.fluid;
+  for (std::size_t i = 0; i < f.size(); ++i) v2 = std::max(v2, f.vx[i] * f.vx[i] + f.vy[i] * f.vy[i] + f.vz[i] * f.vz[i]);
+  const BodyParticles& bp = m_.body_particles;
+  for (std::size_t i = 0; i < bp.size(); ++i) v2 = std::max(v2, bp.vx[i] * bp.vx[i] + bp.vy[i] * bp.vy[i] + bp.vz[i] * bp.vz[i]);
+  double dt = p.max_dt_s;
+  if (v2 > 0) dt = std::min(dt, p.cfl * p.particle_spacing_m / std::sqrt(static_cast<double>(v2)));
+  // Explicit viscosity: the diffusion limit dt <= h^2 / (8 nu).
+  double mu_max = p.fluid_viscosity_pa_s;
+  for (const RigidBody& b : m_.bodies) mu_max = std::max(mu_max, b.viscosity_pa_s);
+  const double h = p.incompressible.kernel.h;
+  if (mu_max > 0) dt = std::min(dt, 0.125 * h * h * p.rest_density_kg_m3 / mu_max);
+  // Contacts are springs of the contact stiffness (body_contacts.hpp): while a body touches
+  // another solid the step resolves them like a speed of sound.
+  if (bodies_touching_) dt = std::min(dt, 0.4 * p.kernel.h / p.speed_of_sound_m_s);
+  return dt;
+}
+
+void DfsphSolver::sort_and_build_pairs() {
+  FluidParticles& f = m_.fluid;
+  fluid_sort_.sort(m_.params.grid, f.x.data(), f.y.data(), f.z.data(), f.size());
+  f.permute(fluid_sort_.order);
+  if (m_.body_particles.size() > 0) {
+    detail::sort_body_view(m_.params.grid, m_.body_particles, body_sort_, body_view_);
+  } else {
+    body_view_.resize(0);
+    body_view_.cell_start.clear();
+  }
+  pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int w) {
+    detail::build_pairs(m_.params, f, fluid_sort_.cell_start.data(), fluid_statics_, body_view_, walls_, b, e, lists_[w],
+                        ranges_.data(), fields_);
+  });
+}
+
+// One DFSPH solve (Bender & Koschier 2017, algorithms 2 and 3). `rate(i, s)` turns particle i's
+// density rate s into its error: for the density solve the predicted density excess
+// rho*/rho0 - 1 = rho_i/rho0 - 1 + dt s (clamped at 0: a free surface is not pulled together);
+// for the divergence solve the compression rate itself, times dt. The stiffness increment
+// error * factor / dt^2 is applied to the velocities until the mean error is below tolerance.
+template <class Rate>
+int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
+  const IncompressibleParams& ip = m_.params.incompressible;
+  FluidParticles& f = m_.fluid;
+  const std::size_t n = f.size();
+  if (n == 0) return 0;
+  float* total = density ? fields_.density_stiffness.data() : fields_.divergence_stiffness.data();
+  float* warm = density ? f.density_stiffness_dt2.data() : f.divergence_stiffness_dt.data();
+  const float warm_scale = density ? 1.0f / (dt * dt) : 1.0f / dt;
+  const float inv_dt2 = 1.0f / (dt * dt);
+  float* step = fields_.stiffness_step.data();
+  // Warm start: where the particle is compressed now, start from part of last step's stiffness.
+  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+    detail::density_rate(f, fields_, lists_[w], ranges_.data(), b, e, step);
+    for (std::size_t i = b; i < e; ++i) {
+      const float k = rate(i, step[i]) > 0 ? kWarmStartFraction * warm[i] * warm_scale : 0.0f;
+      step[i] = k;
+      total[i] = k;
+    }
+  });
+  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+    detail::apply_stiffness(f, fields_, lists_[w], ranges_.data(), b, e, dt);
+  });
+  int it = 0;
+  double mean_error = 0;
+  for (; it < ip.max_iterations; ++it) {
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+      detail::density_rate(f, fields_, lists_[w], ranges_.data(), b, e, step);
+      double sum = 0;
+      for (std::size_t i = b; i < e; ++i) {
+        const float error = rate(i, step[i]);
+        sum += error;
+        const float k = error * fields_.factor[i] * inv_dt2;
+        step[i] = k;
+        total[i] += k;
+      }
+      worker_error_[w] = sum;
+    });
+    double sum = 0;
+    for (double s : worker_error_) sum += s;
+    mean_error = sum / static_cast<double>(n);
+    if (it >= ip.min_iterations && mean_error <= tolerance) break;
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+      detail::apply_stiffness(f, fields_, lists_[w], ranges_.data(), b, e, dt);
+    });
+  }
+  // The last error pass's increments were not applied: take them back out of the total.
+  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
+    const float scale = density ? dt * dt : dt;
+    for (std::size_t i = b; i < e; ++i) {
+      if (it < ip.max_iterations) total[i] -= step[i];
+      warm[i] = total[i] * scale;
+    }
+  });
+  if (it >= ip.max_iterations) ++iterations_.unconverged_solves;
+  if (density) {
+    iterations_.last_density_error = mean_error;
+    iterations_.max_density_error = std::max(iterations_.max_density_error, mean_error);
+  }
+  return it;
+}
+
+void DfsphSolver::divergence_solve(float dt) {
+  const IncompressibleParams& ip = m_.params.incompressible;
+  const std::uint16_t min_neighbours = static_cast<std::uint16_t>(ip.min_divergence_neighbours);
+  // Error: the compression over one step, dt D(rho/rho0)/Dt, only where the neighbourhood is
+  // full enough to estimate it and only compression (an expanding surface is left alone).
+  auto rate = [&](std::size_t i, float s) {
+    return fields_.neighbours[i] >= min_neighbours && s > 0 ? s * dt : 0.0f;
+  };
+  // The increment is error * factor / dt^2 with error = s dt: s factor / dt, as the divergence
+  // solve needs.
+  iterations_.divergence_iterations += static_cast<std::uint64_t>(solve(dt, false, ip.max_divergence_error, rate));
+}
+
+void DfsphSolver::density_solve(float dt) {
+  const IncompressibleParams& ip = m_.params.incompressible;
+  auto rate = [&](std::size_t i, float s) {
+    const float excess = fields_.density_hat[i] - 1.0f + dt * s;
+    return excess > 0 ? excess : 0.0f;
+  };
+  iterations_.density_iterations += static_cast<std::uint64_t>(solve(dt, true, ip.max_density_error, rate));
+}
+
+void DfsphSolver::non_pressure_forces(float dt) {
+  FluidParticles& f = m_.fluid;
+  pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int w) {
+    detail::non_pressure_accelerations(m_.params, f, fluid_statics_, body_view_, fields_, lists_[w], ranges_.data(), b, e,
+                                       dt);
+  });
+  // The bodies' share of the viscous pair terms, from the velocities the fluid's pass just used.
+  if (m_.body_particles.size() > 0)
+    pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) {
+      detail::body_fluid_forces(m_.params, f, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::viscous,
+                                m_.body_particles, b, e);
+    });
+  pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int) {
+    for (std::size_t i = b; i < e; ++i) {
+      f.vx[i] += dt * f.ax[i];
+      f.vy[i] += dt * f.ay[i];
+      f.vz[i] += dt * f.az[i];
+    }
+  });
+}
+
+void DfsphSolver::body_forces_and_step(double dt) {
+  BodyParticles& bp = m_.body_particles;
+  if (bp.size() > 0) {
+    pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int) {
+      detail::body_fluid_forces(m_.params, m_.fluid, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::pressure,
+                                bp, b, e);
+    });
+    std::fill(worker_touching_.begin(), worker_touching_.end(), 0);
+    pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
+      detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, bp, b, e);
+    });
+    pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int w) {
+      worker_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, b, e) ? 1 : 0;
+    });
+    bodies_touching_ = std::any_of(worker_touching_.begin(), worker_touching_.end(), [](char c) { return c != 0; });
+  }
+  detail::step_bodies(m_, couplings_of_body_, devices_, dt, pool_);
+}
+
+// x(t + dt) = x + dt v(t + dt) (symplectic Euler, as DFSPH). Last resort: a particle that reaches
+// a wall's boundary layer (or leaves the box on an open side) is put back and counted.
+void DfsphSolver::integrate_positions(float dt) {
+  FluidParticles& f = m_.fluid;
+  const SimulationParams& p = m_.params;
+  pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int w) {
+    std::uint64_t clamped = 0;
+    float* pos[3] = {f.x.data(), f.y.data(), f.z.data()};
+    float* vel[3] = {f.vx.data(), f.vy.data(), f.vz.data()};
+    for (std::size_t i = b; i < e; ++i) {
+      bool out = false;
+      for (int a = 0; a < 3; ++a) {
+        float v = vel[a][i];
+        float x = pos[a][i] + v * dt;
+        if (x < p.clamp_lo[a]) {
+          x = p.clamp_lo[a], v = v < 0 ? 0 : v, out = true;
+        } else if (x > p.clamp_hi[a]) {
+          x = p.clamp_hi[a], v = v > 0 ? 0 : v, out = true;
+        }
+        vel[a][i] = v;
+        pos[a][i] = x;
+      }
+      clamped += out ? 1 : 0;
+    }
+    worker_clamped_[w] += clamped;
+  });
+  clamped_ = 0;
+  for (auto c : worker_clamped_) clamped_ += c;
+}
+
+void DfsphSolver::step(double dt) {
+  const float dtf = static_cast<float>(dt);
+  auto t0 = Clock::now();
+  sort_and_build_pairs();
+  times_.neighbour_search_s += seconds_since(t0);
+
+  t0 = Clock::now();
+  divergence_solve(dtf);
+  times_.pressure_s += seconds_since(t0);
+
+  t0 = Clock::now();
+  non_pressure_forces(dtf);
+  times_.forces_s += seconds_since(t0);
+
+  t0 = Clock::now();
+  density_solve(dtf);
+  times_.pressure_s += seconds_since(t0);
+
+  t0 = Clock::now();
+  body_forces_and_step(dt);
+  times_.bodies_s += seconds_since(t0);
+
+  t0 = Clock::now();
+  integrate_positions(dtf);
+  times_.integration_s += seconds_since(t0);
+
+  time_s_ += dt;
+  ++steps_;
+}
+
+void DfsphSolver::sync_and_check_finite() {
+  // Density and pressure for the outputs: p = k rho^2 / rho0 of the last constant-density solve
+  // (k = p / (rho rho0) in the solver's normalised form), on the sorted order of that step.
+  FluidParticles& f = m_.fluid;
+  const float rho0 = m_.params.rest_density_kg_m3, mass = m_.params.fluid_particle_mass_kg;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const float rho_hat = fields_.density_hat[i];
+    f.density[i] = rho_hat * rho0;
+    f.volume[i] = mass / f.density[i];
+    f.pressure[i] = fields_.density_stiffness[i] * rho_hat * rho_hat * rho0;
+  }
+  check_finite_state(m_, time_s_);
+}
+
+ComputeDevice DfsphSolver::device() const {
+  const int n = threads();
+  return {std::to_string(n) + (n == 1 ? " CPU thread" : " CPU threads"), "host", ""};
+}
+
+}  // namespace hapfluid::sim
