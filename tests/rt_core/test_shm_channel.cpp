@@ -96,13 +96,13 @@ TEST(ShmChannel, LatestReadParkedWhileTheWriterLapsTheRingNeverGoesBackwards) {
   writer.close();
 }
 
-TEST(ShmChannel, SegmentIsCreatedWithMode0660AndRemovedOnCleanClose) {
-  // Mode 0660: the rig's service group may read and write, nobody else (brief: Contracts).
+TEST(ShmChannel, SegmentIsCreatedWithMode0640AndRemovedOnCleanClose) {
+  // Mode 0640: only the writer may write; the rig's service group may read, nobody else.
   auto name = unique_name("mode");
   auto writer = LatestWriter::create(name, ChannelKind::device_states, 64);
   struct stat st {};
   ASSERT_EQ(::stat(("/dev/shm" + name).c_str(), &st), 0);
-  EXPECT_EQ(st.st_mode & 0777, 0660u);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
   auto reader = LatestReader::attach(name, ChannelKind::device_states, 64);
   writer.close();
   EXPECT_NE(::stat(("/dev/shm" + name).c_str(), &st), 0) << "a clean stop leaves no segment behind";
@@ -120,7 +120,7 @@ TEST(ShmChannel, SegmentBelongsToTheConfiguredGroup) {
   struct stat st {};
   ASSERT_EQ(::stat(("/dev/shm" + name).c_str(), &st), 0);
   EXPECT_EQ(st.st_gid, g->gr_gid);
-  EXPECT_EQ(st.st_mode & 0777, 0660u);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
   writer.close();
 }
 

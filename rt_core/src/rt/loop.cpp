@@ -58,7 +58,7 @@ RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Devic
   }
   states_record_.device_count = static_cast<std::uint32_t>(devices_.size());
   const std::string prefix = options.shm_prefix.empty() ? rig.rt.shm.prefix : options.shm_prefix;
-  shm::WriterOptions writer_options{rig.rt.shm.group, 0660};
+  shm::WriterOptions writer_options{rig.rt.shm.group, 0640};
   device_states_ = shm::LatestWriter::create(shm::segment_name(prefix, shm::ChannelKind::device_states),
                                              shm::ChannelKind::device_states, sizeof(shm::DeviceStatesRecord), 4,
                                              writer_options);

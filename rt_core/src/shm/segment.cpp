@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "hapfluid/shm/channel.hpp"
+#include "segment_trust.hpp"
 #include "truncation_guard.hpp"
 
 namespace hapfluid::shm {
@@ -107,14 +108,19 @@ void init_header(std::byte* base, ChannelKind kind, std::uint32_t slot_count, st
   h->state.store(static_cast<std::uint32_t>(SegmentState::live), std::memory_order_release);
 }
 
-// An existing segment under `name`: may we replace it? Throws when a live writer owns it.
-void check_existing_owner(const std::string& name) {
+// A trusted segment under `name` (the name itself or one of its fallbacks) left by an earlier
+// writer: removed, and said. Throws when a live writer owns it. Untrusted ones are left alone.
+void remove_own_leftover(const std::string& name) {
   int fd = ::shm_open(name.c_str(), O_RDONLY, 0);
-  if (fd < 0) return;  // nothing there (or unreadable: shm_unlink below will tell)
+  if (fd < 0) return;  // nothing there (or unreadable: creating it will tell)
   struct stat st {};
+  if (::fstat(fd, &st) != 0 || !detail::trusted_owner(st.st_uid)) {
+    ::close(fd);
+    return;  // another user's: neither used nor removed (the writer takes a fallback name)
+  }
   pid_t owner = 0;
   bool closed = false;
-  if (::fstat(fd, &st) == 0 && st.st_size >= static_cast<off_t>(sizeof(SegmentHeader))) {
+  if (st.st_size >= static_cast<off_t>(sizeof(SegmentHeader))) {
     void* p = ::mmap(nullptr, sizeof(SegmentHeader), PROT_READ, MAP_SHARED, fd, 0);
     if (p != MAP_FAILED) {
       // Its owner may shrink it while we look.
@@ -130,13 +136,45 @@ void check_existing_owner(const std::string& name) {
     }
   }
   ::close(fd);
-  if (owner == 0 || owner == ::getpid() || closed) return;
-  if (pid_alive(owner))
-    throw ShmError("shm " + name + ": already written by running process pid " + std::to_string(owner) +
-                   ": a channel has exactly one writer; stop that process or use another rt.shm.prefix");
-  // Said once at start-up, so a crashed predecessor is never silent (its readers re-attach).
-  std::fprintf(stderr, "shm %s: replacing the segment left by pid %d, which is no longer running\n", name.c_str(),
-               int(owner));
+  if (owner != 0 && owner != ::getpid() && !closed) {
+    if (pid_alive(owner))
+      throw ShmError("shm " + name + ": already written by running process pid " + std::to_string(owner) +
+                     ": a channel has exactly one writer; stop that process or use another rt.shm.prefix");
+    // Said once at start-up, so a crashed predecessor is never silent (its readers re-attach).
+    std::fprintf(stderr, "shm %s: replacing the segment left by pid %d, which is no longer running\n", name.c_str(),
+                 int(owner));
+  }
+  ::shm_unlink(name.c_str());
+}
+
+// Creates `name`, or a fallback name when an untrusted user holds it; returns the fd (or -1 with
+// errno) and sets `created`.
+int create_exclusive(const std::string& name, std::string& created) {
+  created = name;
+  int fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
+  if (fd >= 0 || errno != EEXIST) return fd;
+  std::string holder = "another user";
+  if (int other = ::shm_open(name.c_str(), O_RDONLY, 0); other >= 0) {
+    struct stat st {};
+    bool trusted = ::fstat(other, &st) == 0 && detail::trusted_owner(st.st_uid);
+    ::close(other);
+    if (trusted) {  // a writer of ours created it since we looked: one writer per channel
+      errno = EEXIST;
+      return -1;
+    }
+    holder = detail::describe_user(st.st_uid);
+  }
+  for (int attempt = 0; attempt < 4 && fd < 0; ++attempt) {
+    created = detail::new_fallback_name(name);
+    fd = ::shm_open(created.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
+    if (fd < 0 && errno != EEXIST) return fd;
+  }
+  if (fd >= 0)
+    std::fprintf(stderr,
+                 "shm %s: the name is held by %s, which this writer neither trusts nor may remove: writing %s "
+                 "instead (readers find it); remove the impostor with rm /dev/shm%s\n",
+                 name.c_str(), holder.c_str(), created.c_str(), name.c_str());
+  return fd;
 }
 
 }  // namespace
@@ -233,12 +271,19 @@ Segment Segment::create(const std::string& name, ChannelKind kind, std::uint32_t
                      "\" does not exist: create it (groupadd) or fix rt.shm.group in the rig file");
     gid = g->gr_gid;
   }
-  check_existing_owner(name);
-  ::shm_unlink(name.c_str());  // a dead writer's leftover; ENOENT is the normal case
+  if (options.mode & 0022) {
+    char mode[16];
+    std::snprintf(mode, sizeof mode, "%04o", options.mode);
+    throw ShmError("shm " + name + ": mode " + mode +
+                   " lets others than its writer write the channel, and readers refuse such a segment: use 0640");
+  }
+  remove_own_leftover(name);
+  for (const std::string& fallback : detail::fallback_names(name)) remove_own_leftover(fallback);
 
   Layout layout = layout_for(slot_count, payload_bytes);
   // Created owner-only; fchmod below sets the exact mode (no process-wide umask games).
-  int fd = ::shm_open(name.c_str(), O_RDWR | O_CREAT | O_EXCL, 0600);
+  std::string created;
+  int fd = create_exclusive(name, created);
   int err = errno;
   if (fd < 0)
     throw ShmError("shm " + name + ": cannot create: " + errno_text(err) +
@@ -246,8 +291,8 @@ Segment Segment::create(const std::string& name, ChannelKind kind, std::uint32_t
   auto fail = [&](const std::string& what) {
     int e = errno;
     ::close(fd);
-    ::shm_unlink(name.c_str());
-    throw ShmError("shm " + name + ": " + what + ": " + errno_text(e));
+    ::shm_unlink(created.c_str());
+    throw ShmError("shm " + created + ": " + what + ": " + errno_text(e));
   };
   if (gid != static_cast<gid_t>(-1) && ::fchown(fd, static_cast<uid_t>(-1), gid) != 0)
     fail("cannot give it to group \"" + options.group + "\" (the writer must be a member or root)");
@@ -261,7 +306,7 @@ Segment Segment::create(const std::string& name, ChannelKind kind, std::uint32_t
   ::close(fd);
 
   Segment s;
-  s.name_ = name;
+  s.name_ = created;
   s.base_ = static_cast<std::byte*>(p);
   s.size_ = layout.total_bytes;
   s.inode_ = st.st_ino;
@@ -286,16 +331,51 @@ Segment Segment::create_private(ChannelKind kind, std::uint32_t slot_count, std:
   return s;
 }
 
+namespace {
+bool writer_running(const Segment& s) {
+  return s.header().state.load(std::memory_order_acquire) == static_cast<std::uint32_t>(SegmentState::live) &&
+         pid_alive(s.layout().writer_pid);
+}
+}  // namespace
+
 Segment Segment::attach(const std::string& name, ChannelKind kind, std::uint64_t payload_bytes) {
+  std::string refused;
+  Segment s = attach_exact(name, kind, payload_bytes, refused);
+  if (s.valid() && writer_running(s)) return s;
+  // The name is missing, held by someone untrusted, or a leftover its new writer could not remove:
+  // that writer then took a fallback name.
+  for (const std::string& fallback : detail::fallback_names(name)) {
+    std::string ignored;
+    try {
+      Segment candidate = attach_exact(fallback, kind, payload_bytes, ignored);
+      if (candidate.valid() && writer_running(candidate)) return candidate;
+    } catch (const ShmError&) {
+      // A leftover or a half-created fallback: not the live writer.
+    }
+  }
+  if (s.valid()) return s;  // a dead writer's segment: its readers see it as dead
+  throw ShmError("shm " + name + ": " + refused);
+}
+
+Segment Segment::attach_exact(const std::string& name, ChannelKind kind, std::uint64_t payload_bytes,
+                              std::string& refused) {
   int fd = ::shm_open(name.c_str(), O_RDONLY, 0);
   if (fd < 0) {
     int e = errno;
-    throw ShmError("shm " + name + ": cannot open: " + errno_text(e) +
-                   (e == ENOENT ? " (its writer has not started yet)"
-                    : e == EACCES ? " (add this user to the channel's group, rt.shm.group)"
-                                  : ""));
+    refused = "cannot open: " + errno_text(e) +
+              (e == ENOENT ? " (its writer has not started yet)"
+               : e == EACCES ? " (add this user to the channel's group, rt.shm.group)"
+                             : "");
+    return {};
   }
   struct stat st {};
+  if (::fstat(fd, &st) == 0) refused = detail::trust_problem(st);
+  if (!refused.empty()) {
+    ::close(fd);
+    refused = "the segment " + refused + ": refusing it. Its writer has not started yet (it writes " + name +
+              ".<hex> when the name is taken); remove the impostor with rm /dev/shm" + name;
+    return {};
+  }
   if (::fstat(fd, &st) != 0 || st.st_size < static_cast<off_t>(sizeof(SegmentHeader))) {
     ::close(fd);
     throw ShmError("shm " + name + ": too small to be a hapfluid segment (" + std::to_string(st.st_size) +

@@ -2,8 +2,12 @@
 //
 // Ownership (iceoryx-style, explicit):
 //   * One POSIX shm segment per channel, named "/<prefix>.<channel>", created by its single writer
-//     with mode 0660 (group configurable). Only the writer maps it writable; readers map it
-//     read-only and never write a byte, so any number of readers can come and go.
+//     with mode 0640 (group configurable): only the writer may write it, and only it maps it
+//     writable; readers map it read-only and never write a byte, so any number can come and go.
+//   * Readers trust a segment only if its owner is their own user or root and no one else may
+//     write it; attach refuses any other, naming its owner. A writer whose name another user
+//     holds takes a fallback name "<name>.<hex>" that readers look for (segment_trust.hpp), so a
+//     squatter can neither hijack nor block a rig.
 //   * The writer unlinks the segment on a clean close. A segment left behind by a crashed writer
 //     is detected (its writer pid is gone) and replaced by the next writer.
 //   * Every segment starts with a SegmentHeader: magic, ABI version, channel kind, sizes, writer
@@ -86,7 +90,7 @@ const char* to_string(WriterStatus);
 
 struct WriterOptions {
   std::string group;        // owning group of the segment; empty: the process's group
-  unsigned mode = 0660;
+  unsigned mode = 0640;      // no group or other write bit: readers refuse such a segment
 };
 
 // What a segment's header said at creation or attach, kept in process memory. Slots are found
@@ -144,6 +148,10 @@ class Segment {
 
  private:
   void release();
+  // Maps exactly `name`. Missing or untrusted (owner, mode): an invalid Segment and the reason
+  // in `refused`; any other mismatch throws.
+  static Segment attach_exact(const std::string& name, ChannelKind kind, std::uint64_t payload_bytes,
+                              std::string& refused);
   std::string name_;
   std::byte* base_ = nullptr;
   std::size_t size_ = 0;
