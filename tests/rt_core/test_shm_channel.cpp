@@ -110,7 +110,7 @@ TEST(ShmChannel, SegmentIsCreatedWithMode0640AndRemovedOnCleanClose) {
 }
 
 TEST(ShmChannel, SegmentBelongsToTheConfiguredGroup) {
-  // rt.shm.group lets the sim and render services (another user, same group) read the channel.
+  // rt.shm.group is the group that may read the channel (never write it: mode 0640).
   struct group* g = ::getgrgid(::getgid());
   ASSERT_NE(g, nullptr);
   auto name = unique_name("owned");

@@ -39,8 +39,9 @@ std::string trust_problem(const struct stat& st) {
   const uid_t self = ::geteuid();
   if (!S_ISREG(st.st_mode)) return "is not a regular shared-memory object";
   if (!trusted_owner(st.st_uid))
-    return "is owned by " + describe_user(st.st_uid) + ", not by this service's user (" + describe_user(self) +
-           ") or root";
+    return "is owned by " + describe_user(st.st_uid) + ", not by " +
+           (self == 0 ? std::string("root (this service's user)")
+                      : "this service's user (" + describe_user(self) + ") or root");
   if (st.st_mode & (S_IWGRP | S_IWOTH)) {
     char mode[16];
     std::snprintf(mode, sizeof mode, "%04o", unsigned(st.st_mode & 07777));
