@@ -19,7 +19,7 @@ void ShmSource::attach_if_due(std::uint64_t now_ns) {
     next_liveness_ns_ = now_ns + std::uint64_t(options_.reattach_interval_s * kNsPerS);
     status_ = particles_.check_liveness(now_ns, std::uint64_t(options_.stale_after_s * kNsPerS));
     if (status_ == shm::WriterStatus::dead || status_ == shm::WriterStatus::replaced ||
-        status_ == shm::WriterStatus::closed) {
+        status_ == shm::WriterStatus::closed || status_ == shm::WriterStatus::corrupt) {
       std::fprintf(stderr, "haptic-render: the simulator's particles channel is %s: waiting for a new writer\n",
                    shm::to_string(status_));
       particles_ = shm::LatestReader();
@@ -32,7 +32,7 @@ void ShmSource::attach_if_due(std::uint64_t now_ns) {
   try {
     // Payload size 0: the writer chose max_particles; check the frame layout ourselves.
     shm::LatestReader reader = shm::LatestReader::attach(name, shm::ChannelKind::particles, 0);
-    const std::uint64_t bytes = reader.segment().header().payload_bytes;
+    const std::uint64_t bytes = reader.segment().layout().payload_bytes;
     if (bytes < sizeof(shm::ParticleFrameHeader) ||
         (bytes - sizeof(shm::ParticleFrameHeader)) % sizeof(shm::ParticleRecord) != 0) {
       std::fprintf(stderr, "haptic-render: %s holds %llu-byte records, not particle frames: ignoring it\n",
@@ -40,7 +40,7 @@ void ShmSource::attach_if_due(std::uint64_t now_ns) {
       return;
     }
     buffer_.assign(bytes, std::byte{0});
-    incarnation_ = reader.segment().header().incarnation;
+    incarnation_ = reader.segment().layout().incarnation;
     particles_ = std::move(reader);
     last_generation_ = 0;
     status_ = shm::WriterStatus::live;

@@ -91,7 +91,7 @@ class DeviceInput {
       if (!reader_.valid()) {
         try {
           reader_ = shm::LatestReader::attach(name_, shm::ChannelKind::device_states, sizeof(shm::DeviceStatesRecord));
-          log << "haptic-sim: attached to " << name_ << " (haptic-rt pid " << reader_.segment().header().writer_pid << ")\n";
+          log << "haptic-sim: attached to " << name_ << " (haptic-rt pid " << reader_.segment().layout().writer_pid << ")\n";
           last_generation_ = 0;
         } catch (const shm::ShmError& e) {
           if (!attach_error_said_) log << "haptic-sim: waiting for haptic-rt: " << e.what() << "\n";

@@ -59,13 +59,50 @@ TEST(ShmChannel, ReaderSeesTheNewestRecordAndItsGeneration) {
   writer.close();
 }
 
-TEST(ShmChannel, SegmentIsCreatedWithMode0660AndRemovedOnCleanClose) {
-  // Mode 0660: the rig's service group may read and write, nobody else (brief: Contracts).
+// The writer stopped between filling a slot and publishing it: `generation` is in its slot, and
+// `published` still names the record before it. Written as LatestWriter::publish writes a slot.
+void fill_slot_without_publishing(const LatestWriter& writer, std::uint64_t generation, const Sample& record) {
+  std::byte* slot = writer.segment().slot(generation);
+  auto& header = *reinterpret_cast<SlotHeader*>(slot);
+  const std::uint64_t sequence = header.sequence.load();
+  header.sequence.store(sequence + 1);
+  header.generation.store(generation);
+  std::memcpy(slot + kSlotHeaderBytes, &record, sizeof record);
+  header.sequence.store(sequence + 2);
+}
+
+TEST(ShmChannel, LatestReadParkedWhileTheWriterLapsTheRingNeverGoesBackwards) {
+  // A reader loads published = 1 and is descheduled; the writer publishes 2 and 3 on a 3-slot
+  // ring and has filled slot 1 % 3 with record 4 but not yet published it. Copying record 4 now
+  // and record 3 on the next read would hand the loop an older sim sample after a newer one.
+  // The reader's two steps (load published, copy that generation) are driven one by one here.
+  constexpr std::uint32_t kSlots = 3;
+  auto name = unique_name("lapped");
+  auto writer = LatestWriter::create(name, ChannelKind::sim_samples, sizeof(Sample), kSlots);
+  auto reader = LatestReader::attach(name, ChannelKind::sim_samples, sizeof(Sample));
+  writer.publish(Sample{1, {}});
+  const std::uint64_t parked = reader.published();
+  ASSERT_EQ(parked, 1u);
+  for (std::uint64_t value = 2; value <= kSlots; ++value) writer.publish(Sample{value, {}});
+  fill_slot_without_publishing(writer, parked + kSlots, Sample{parked + kSlots, {}});
+
+  Sample out{};
+  EXPECT_EQ(reader.read_generation(parked, &out, sizeof out), ReadResult::overwritten)
+      << "the parked reader copied record " << out.value << " in place of record " << parked;
+  std::uint64_t generation = 0;
+  ASSERT_EQ(reader.try_read(out, &generation), ReadResult::ok);
+  EXPECT_EQ(generation, kSlots) << "the newest published record, not the unpublished one";
+  EXPECT_EQ(out.value, kSlots);
+  writer.close();
+}
+
+TEST(ShmChannel, SegmentIsCreatedWithMode0640AndRemovedOnCleanClose) {
+  // Mode 0640: only the writer may write; the rig's service group may read, nobody else.
   auto name = unique_name("mode");
   auto writer = LatestWriter::create(name, ChannelKind::device_states, 64);
   struct stat st {};
   ASSERT_EQ(::stat(("/dev/shm" + name).c_str(), &st), 0);
-  EXPECT_EQ(st.st_mode & 0777, 0660u);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
   auto reader = LatestReader::attach(name, ChannelKind::device_states, 64);
   writer.close();
   EXPECT_NE(::stat(("/dev/shm" + name).c_str(), &st), 0) << "a clean stop leaves no segment behind";
@@ -73,7 +110,7 @@ TEST(ShmChannel, SegmentIsCreatedWithMode0660AndRemovedOnCleanClose) {
 }
 
 TEST(ShmChannel, SegmentBelongsToTheConfiguredGroup) {
-  // rt.shm.group lets the sim and render services (another user, same group) read the channel.
+  // rt.shm.group is the group that may read the channel (never write it: mode 0640).
   struct group* g = ::getgrgid(::getgid());
   ASSERT_NE(g, nullptr);
   auto name = unique_name("owned");
@@ -83,7 +120,7 @@ TEST(ShmChannel, SegmentBelongsToTheConfiguredGroup) {
   struct stat st {};
   ASSERT_EQ(::stat(("/dev/shm" + name).c_str(), &st), 0);
   EXPECT_EQ(st.st_gid, g->gr_gid);
-  EXPECT_EQ(st.st_mode & 0777, 0660u);
+  EXPECT_EQ(st.st_mode & 0777, 0640u);
   writer.close();
 }
 
@@ -178,7 +215,7 @@ TEST(ShmChannel, DeadWriterIsDetectedAndItsLeftoverSegmentReplaced) {
   restarted.publish(Sample{99, {}});
   EXPECT_EQ(reader.check_liveness(monotonic_ns(), 50'000'000), WriterStatus::replaced);
   auto fresh = LatestReader::attach(name, ChannelKind::sim_samples, sizeof(Sample));
-  EXPECT_NE(fresh.segment().header().incarnation, reader.segment().header().incarnation);
+  EXPECT_NE(fresh.segment().layout().incarnation, reader.segment().layout().incarnation);
   Sample out{};
   ASSERT_EQ(fresh.try_read(out), ReadResult::ok);
   EXPECT_EQ(out.value, 99u);
@@ -248,8 +285,8 @@ TEST(ShmChannel, VariableSizeParticleFrameRoundTrips) {
   auto writer = LatestWriter::create(name, ChannelKind::particles, frame.size(), 3);
   writer.publish(frame.data(), frame.size());
   auto reader = LatestReader::attach(name, ChannelKind::particles, 0);
-  ASSERT_EQ(reader.segment().header().payload_bytes, particle_frame_bytes(max_particles));
-  std::vector<std::byte> copy(reader.segment().header().payload_bytes);
+  ASSERT_EQ(reader.segment().layout().payload_bytes, particle_frame_bytes(max_particles));
+  std::vector<std::byte> copy(reader.segment().layout().payload_bytes);
   ASSERT_EQ(reader.try_read(copy.data(), copy.size()), ReadResult::ok);
   EXPECT_EQ(reinterpret_cast<ParticleFrameHeader*>(copy.data())->particle_count, 3u);
   EXPECT_EQ(reinterpret_cast<ParticleRecord*>(copy.data() + sizeof(ParticleFrameHeader))[2].position_m[1], 0.25f);

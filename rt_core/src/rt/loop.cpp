@@ -58,7 +58,7 @@ RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Devic
   }
   states_record_.device_count = static_cast<std::uint32_t>(devices_.size());
   const std::string prefix = options.shm_prefix.empty() ? rig.rt.shm.prefix : options.shm_prefix;
-  shm::WriterOptions writer_options{rig.rt.shm.group, 0660};
+  shm::WriterOptions writer_options{rig.rt.shm.group, 0640};
   device_states_ = shm::LatestWriter::create(shm::segment_name(prefix, shm::ChannelKind::device_states),
                                              shm::ChannelKind::device_states, sizeof(shm::DeviceStatesRecord), 4,
                                              writer_options);
@@ -86,12 +86,14 @@ void RtLoop::read_sim(std::uint64_t now, std::uint32_t& loop_flags) {
     sim_ = offered;
     sim_epoch_ack_.store(sim_ ? sim_->epoch : 0, std::memory_order_release);
   }
-  if (!sim_ || !sim_->reader.valid()) {
+  // A corrupt segment (header rewritten, object shrunk) is no sim at all: no new samples, so the
+  // safety layer ages the last one out exactly as for a sim that died.
+  if (!sim_ || !sim_->reader.valid() || !sim_->reader.segment().intact()) {
     loop_flags |= loop_sim_not_attached;
     return;
   }
   // Nothing new since the last copy: skip the 2-3 KB read.
-  std::uint64_t incarnation = sim_->reader.segment().header().incarnation;
+  std::uint64_t incarnation = sim_->reader.segment().layout().incarnation;
   if (incarnation == sample_incarnation_ && sim_->reader.published() == sample_generation_) return;
   std::uint64_t generation = 0;
   shm::ReadResult r = sim_->reader.try_read(scratch_, &generation);

@@ -118,8 +118,10 @@ void Supervisor::manage_sim() {
       last_sim_message_ = message;
     }
     if (status != shm::WriterStatus::replaced) {
-      // A dead/closed writer whose name is gone or unchanged: wait for a new segment.
-      if (status != shm::WriterStatus::dead && status != shm::WriterStatus::closed) return;
+      // A dead/closed/corrupt writer whose name is gone or unchanged: wait for a new segment.
+      if (status != shm::WriterStatus::dead && status != shm::WriterStatus::closed &&
+          status != shm::WriterStatus::corrupt)
+        return;
     }
   }
   try {
@@ -128,8 +130,9 @@ void Supervisor::manage_sim() {
                                                    sizeof(shm::SimSample));
     if (sim_current_ && attachment->reader.segment().inode() == sim_current_->reader.segment().inode()) return;
     attachment->epoch = ++sim_epoch_;
-    std::fprintf(stderr, "haptic-rt: sim_samples: attached %s (writer pid %d)\n", options_.sim_segment.c_str(),
-                 attachment->reader.segment().header().writer_pid);
+    // The segment's own name: a fallback when another user holds the channel's name.
+    std::fprintf(stderr, "haptic-rt: sim_samples: attached %s (writer pid %d)\n",
+                 attachment->reader.segment().name().c_str(), attachment->reader.segment().layout().writer_pid);
     last_sim_message_.clear();
     loop_.offer_sim(attachment.get());
     sim_retired_ = std::move(sim_current_);

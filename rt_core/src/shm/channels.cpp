@@ -44,7 +44,13 @@ SlotHeader& slot_header(const Segment& s, std::uint64_t index) {
 }
 std::byte* slot_payload(const Segment& s, std::uint64_t index) { return s.slot(index) + kSlotHeaderBytes; }
 
-// Writes one record into slot `index` under its sequence word; `generation` is 1-based.
+// The private layout bounds every copy, whatever the caller asked for.
+std::uint64_t clamp_bytes(const Segment& s, std::uint64_t bytes) {
+  return bytes > s.layout().payload_bytes ? s.layout().payload_bytes : bytes;
+}
+
+// Writes one record into slot `index` (reduced by Segment::slot) under its sequence word;
+// `generation` is 1-based.
 void write_slot(const Segment& s, std::uint64_t index, std::uint64_t generation, const void* record,
                 std::uint64_t bytes) {
   SlotHeader& slot = slot_header(s, index);
@@ -86,9 +92,9 @@ LatestWriter LatestWriter::create(const std::string& name, ChannelKind kind, std
 
 std::uint64_t LatestWriter::publish(const void* record, std::uint64_t bytes) {
   SegmentHeader& h = segment_.writable_header();
-  if (bytes > h.payload_bytes) bytes = h.payload_bytes;
+  bytes = clamp_bytes(segment_, bytes);
   std::uint64_t generation = h.published.load(std::memory_order_relaxed) + 1;
-  write_slot(segment_, generation % h.slot_count, generation, record, bytes);
+  write_slot(segment_, generation, generation, record, bytes);
   h.published.store(generation, std::memory_order_release);
   beat(h);
   return generation;
@@ -96,24 +102,39 @@ std::uint64_t LatestWriter::publish(const void* record, std::uint64_t bytes) {
 
 void LatestWriter::heartbeat() { beat(segment_.writable_header()); }
 
+ReadResult LatestReader::read_generation(std::uint64_t generation, void* out, std::uint64_t bytes,
+                                         int max_attempts) const {
+  if (!segment_.valid()) return ReadResult::not_attached;
+  if (generation == 0) return ReadResult::no_data;
+  bytes = clamp_bytes(segment_, bytes);
+  ReadResult result = ReadResult::busy;
+  for (int attempt = 0; attempt < max_attempts && result == ReadResult::busy; ++attempt) {
+    std::uint64_t held = 0;
+    if (read_slot(segment_, generation, out, bytes, &held))
+      result = held == generation ? ReadResult::ok : ReadResult::overwritten;
+  }
+  // Checked after the copy: a shrunk object reads as zero pages, a rewritten header as anything.
+  return segment_.intact() ? result : ReadResult::corrupt;
+}
+
 ReadResult LatestReader::try_read(void* out, std::uint64_t bytes, std::uint64_t* generation,
                                   int max_attempts) const {
   if (!segment_.valid()) return ReadResult::not_attached;
-  const SegmentHeader& h = segment_.header();
-  if (bytes > h.payload_bytes) bytes = h.payload_bytes;
   for (int attempt = 0; attempt < max_attempts; ++attempt) {
-    std::uint64_t newest = h.published.load(std::memory_order_acquire);
-    if (newest == 0) return ReadResult::no_data;
-    if (read_slot(segment_, newest % h.slot_count, out, bytes, generation)) return ReadResult::ok;
+    std::uint64_t newest = published();
+    ReadResult r = read_generation(newest, out, bytes);
+    if (r == ReadResult::ok && generation) *generation = newest;
+    // busy (torn) and overwritten (lapped): the writer moved on; look at the newest again.
+    if (r != ReadResult::busy && r != ReadResult::overwritten) return r;
   }
   return ReadResult::busy;
 }
 
 WriterStatus LatestReader::status(std::uint64_t now_ns, std::uint64_t stale_after_ns) const {
   if (!segment_.valid()) return WriterStatus::not_attached;
+  if (!segment_.intact()) return WriterStatus::corrupt;
   return header_status(segment_.header(), now_ns, stale_after_ns);
 }
-
 WriterStatus LatestReader::check_liveness(std::uint64_t now_ns, std::uint64_t stale_after_ns) const {
   return segment_liveness(segment_, now_ns, stale_after_ns);
 }
@@ -142,9 +163,9 @@ RingWriter RingWriter::create_private(ChannelKind kind, std::uint64_t record_byt
 
 void RingWriter::push(const void* record, std::uint64_t bytes) {
   SegmentHeader& h = segment_.writable_header();
-  if (bytes > h.payload_bytes) bytes = h.payload_bytes;
+  bytes = clamp_bytes(segment_, bytes);
   std::uint64_t index = h.published.load(std::memory_order_relaxed);  // 0-based record index
-  write_slot(segment_, index & (h.slot_count - 1), index + 1, record, bytes);
+  write_slot(segment_, index, index + 1, record, bytes);
   h.published.store(index + 1, std::memory_order_release);
   beat(h);
 }
@@ -152,24 +173,25 @@ void RingWriter::push(const void* record, std::uint64_t bytes) {
 std::uint64_t RingWriter::pushed() const { return segment_.header().published.load(std::memory_order_relaxed); }
 
 bool RingReader::read_at(std::uint64_t index, void* out, std::uint64_t bytes) const {
-  const SegmentHeader& h = segment_->header();
-  if (bytes > h.payload_bytes) bytes = h.payload_bytes;
+  bytes = clamp_bytes(*segment_, bytes);
   std::uint64_t generation = 0;
   for (int attempt = 0; attempt < 4; ++attempt) {
-    if (read_slot(*segment_, index & (h.slot_count - 1), out, bytes, &generation)) return generation == index + 1;
+    if (read_slot(*segment_, index, out, bytes, &generation))
+      return generation == index + 1 && segment_->intact();
   }
   return false;
 }
 
 bool RingReader::next(void* out, std::uint64_t bytes) {
-  if (!segment_ || !segment_->valid()) return false;
+  if (!segment_ || !segment_->valid() || !segment_->intact()) return false;
   const SegmentHeader& h = segment_->header();
+  const std::uint64_t slot_count = segment_->layout().slot_count;
   for (int attempt = 0; attempt < 64; ++attempt) {  // bounded even against a corrupt segment
     std::uint64_t written = h.published.load(std::memory_order_acquire);
     if (position_ >= written) return false;
-    if (written - position_ > h.slot_count) {  // lapped: the oldest records are gone
-      lost_ += written - h.slot_count - position_;
-      position_ = written - h.slot_count;
+    if (written - position_ > slot_count) {  // lapped: the oldest records are gone
+      lost_ += written - slot_count - position_;
+      position_ = written - slot_count;
     }
     if (read_at(position_, out, bytes)) {
       ++position_;
@@ -177,7 +199,7 @@ bool RingReader::next(void* out, std::uint64_t bytes) {
     }
     // Overwritten while we copied it (or still being written by a lapping writer): skip it.
     std::uint64_t now_written = h.published.load(std::memory_order_acquire);
-    if (now_written - position_ > h.slot_count - 1) {
+    if (now_written - position_ > slot_count - 1) {
       ++lost_;
       ++position_;
     }
@@ -187,7 +209,7 @@ bool RingReader::next(void* out, std::uint64_t bytes) {
 
 RingReader RingAttachment::reader_from_oldest() const {
   std::uint64_t written = segment_.header().published.load(std::memory_order_acquire);
-  std::uint64_t n = segment_.header().slot_count;
+  std::uint64_t n = segment_.layout().slot_count;
   return RingReader(segment_, written > n ? written - n : 0);
 }
 
@@ -197,6 +219,7 @@ RingReader RingAttachment::reader_from_newest() const {
 
 WriterStatus RingAttachment::status(std::uint64_t now_ns, std::uint64_t stale_after_ns) const {
   if (!segment_.valid()) return WriterStatus::not_attached;
+  if (!segment_.intact()) return WriterStatus::corrupt;
   return header_status(segment_.header(), now_ns, stale_after_ns);
 }
 

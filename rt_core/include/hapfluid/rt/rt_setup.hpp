@@ -18,7 +18,7 @@ enum LoopFlag : std::uint32_t {
   loop_no_affinity = 1u << 2,      // not pinned to the configured CPU (degraded)
   loop_not_preempt_rt = 1u << 3,   // kernel is not PREEMPT_RT
   loop_overrun = 1u << 4,          // this tick started late by more than a period
-  loop_sim_not_attached = 1u << 5, // no sim_samples segment mapped
+  loop_sim_not_attached = 1u << 5, // no usable sim_samples segment mapped (none, or a corrupt one)
   loop_sim_read_busy = 1u << 6,    // the sim sample could not be read consistently this tick
   loop_new_sim_sample = 1u << 7,   // a new sim sample arrived this tick
 };

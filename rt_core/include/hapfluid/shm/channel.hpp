@@ -2,20 +2,31 @@
 //
 // Ownership (iceoryx-style, explicit):
 //   * One POSIX shm segment per channel, named "/<prefix>.<channel>", created by its single writer
-//     with mode 0660 (group configurable). Only the writer maps it writable; readers map it
-//     read-only and never write a byte, so any number of readers can come and go.
+//     with mode 0640 (group configurable): only the writer may write it, and only it maps it
+//     writable; readers map it read-only and never write a byte, so any number can come and go.
+//   * Readers trust a segment only if its owner is their own user or root and no one else may
+//     write it; attach refuses any other, naming its owner. A writer whose name another user
+//     holds takes a fallback name "<name>.<hex>" that readers look for (segment_trust.hpp), so a
+//     squatter can neither hijack nor block a rig.
 //   * The writer unlinks the segment on a clean close. A segment left behind by a crashed writer
 //     is detected (its writer pid is gone) and replaced by the next writer.
 //   * Every segment starts with a SegmentHeader: magic, ABI version, channel kind, sizes, writer
 //     pid, an incarnation id, a heartbeat counter and timestamps. Readers check all of it at attach
 //     and say clearly what does not match.
+//   * Readers trust nothing in a segment after attach: they keep a private copy of its layout
+//     (SegmentLayout) and index slots only with that copy, a header rewritten later or an object
+//     shrunk later (a SIGBUS guard) makes the segment `corrupt`, which its users treat like a
+//     dead writer. No content of a segment can crash a reader.
 //
 // Concurrency:
 //   * LatestWriter/LatestReader ("latest value", e.g. device states, sim samples, particle frames):
 //     an N-slot buffer; each slot carries a sequence word (odd while being written) and the
-//     record's generation. The writer is wait-free (it never looks at readers). A reader copies the
-//     newest slot and re-checks the sequence; a torn copy is detected and retried a bounded number
-//     of times, so the read is lock-free and never returns a torn record.
+//     record's generation. The writer is wait-free (it never looks at readers). A reader loads the
+//     published generation g, copies slot g % N and re-checks the sequence, and accepts the copy
+//     only if the slot still holds generation g: a writer that lapped the ring in between may have
+//     filled that slot with g + N before publishing it, and returning g + N then g + N - 1 would
+//     run time backwards. A torn or lapped copy is retried a bounded number of times, so the read
+//     is lock-free, monotonic and never returns a torn record.
 //   * RingWriter/RingReader (trace): an overwrite ring of fixed records, each slot stamped with its
 //     record index. The writer never blocks; a slow reader loses the oldest records and counts them.
 //   * Payload bytes are copied as 8-byte relaxed atomics (std::atomic_ref), so concurrent access is
@@ -73,12 +84,26 @@ enum class WriterStatus {
   closed,        // writer closed the channel cleanly
   dead,          // writer pid no longer exists (from check_liveness)
   replaced,      // the name now refers to a new segment: a restarted writer (from check_liveness)
+  corrupt,       // the segment no longer has the layout it had at attach: treat the writer as dead
 };
 const char* to_string(WriterStatus);
 
 struct WriterOptions {
   std::string group;        // owning group of the segment; empty: the process's group
-  unsigned mode = 0660;
+  unsigned mode = 0640;      // no group or other write bit: readers refuse such a segment
+};
+
+// What a segment's header said at creation or attach, kept in process memory. Slots are found
+// with this copy only, so a writer rewriting its header later cannot steer a reader out of bounds.
+struct SegmentLayout {
+  std::uint32_t channel_kind = 0;
+  std::uint32_t slot_count = 0;
+  std::uint64_t slot_bytes = 0;
+  std::uint64_t payload_bytes = 0;
+  std::uint64_t total_bytes = 0;
+  std::uint64_t incarnation = 0;
+  std::int32_t writer_pid = 0;
+  bool operator==(const SegmentLayout&) const = default;
 };
 
 // A mapped segment: the RAII base of every writer and reader. Move-only.
@@ -98,29 +123,42 @@ class Segment {
                         std::uint64_t payload_bytes, const WriterOptions& options = {});
   // Reader side: maps "/name" read-only and validates the header. `payload_bytes` 0 accepts the
   // writer's size (variable-size channels check it themselves). Throws ShmError naming what did
-  // not match (missing segment, magic, ABI version, kind, size, still initializing).
+  // not match (missing segment, magic, ABI version, kind, size, still initializing, sizes that
+  // do not add up to the object's size).
   static Segment attach(const std::string& name, ChannelKind kind, std::uint64_t payload_bytes);
   // Process-local anonymous mapping with the same layout (no name, never shared).
   static Segment create_private(ChannelKind kind, std::uint32_t slot_count, std::uint64_t payload_bytes);
 
   bool valid() const { return base_ != nullptr; }
   const std::string& name() const { return name_; }
+  // The shared header: only its atomics (state, heartbeat, published) are meant to change; read
+  // sizes and identity from layout().
   const SegmentHeader& header() const { return *reinterpret_cast<const SegmentHeader*>(base_); }
   SegmentHeader& writable_header() { return *reinterpret_cast<SegmentHeader*>(base_); }
-  std::byte* slot(std::uint64_t index) const;  // index already reduced modulo slot_count
+  const SegmentLayout& layout() const { return layout_; }
+  // Slot `index % slot_count` of the private layout: always inside the mapping.
+  std::byte* slot(std::uint64_t index) const;
   bool writable() const { return writable_; }
   ino_t inode() const { return inode_; }
+  // Wait-free, no syscall: the object was not shrunk and its header still matches layout().
+  bool intact() const;
 
   // Writer: marks the segment closed, unmaps, and unlinks the name if it is still ours.
   void close();
 
  private:
   void release();
+  // Maps exactly `name`. Missing or untrusted (owner, mode): an invalid Segment and the reason
+  // in `refused`; any other mismatch throws.
+  static Segment attach_exact(const std::string& name, ChannelKind kind, std::uint64_t payload_bytes,
+                              std::string& refused);
   std::string name_;
   std::byte* base_ = nullptr;
   std::size_t size_ = 0;
   ino_t inode_ = 0;
   bool writable_ = false;
+  SegmentLayout layout_;
+  int truncation_guard_ = -1;
 };
 
 class ShmError : public std::runtime_error {
@@ -142,6 +180,8 @@ enum class ReadResult {
   ok,           // `out` holds a consistent record newer than or equal to the previous read
   no_data,      // writer has not published yet
   busy,         // the writer overwrote the slot during every bounded attempt; try next tick
+  overwritten,  // (read_generation) the slot no longer holds that generation: read the newest
+  corrupt,      // the segment's header changed or its object shrank since attach: a dead writer
   not_attached,
 };
 
@@ -176,6 +216,10 @@ class LatestReader {
   template <class T> ReadResult try_read(T& out, std::uint64_t* generation = nullptr) const {
     return try_read(&out, sizeof(T), generation);
   }
+  // try_read's second step, after loading published(): copies record `generation` only if its
+  // slot still holds exactly that record (ok), else `overwritten`. Public so that a test can
+  // run a writer between the two steps.
+  ReadResult read_generation(std::uint64_t generation, void* out, std::uint64_t bytes, int max_attempts = 1) const;
   // Heartbeat-based status; no syscall. stale_after_ns 0 disables the stale check.
   WriterStatus status(std::uint64_t now_ns, std::uint64_t stale_after_ns) const;
   // Non-RT: adds `dead` (pid gone) and `replaced` (a new segment under the name) to status().
