@@ -88,8 +88,11 @@ Fluid read_fluid(Reader& r, const Domain& domain) {
   r.check("max_solver_iterations", f.max_solver_iterations >= 2 && f.max_solver_iterations <= 1000, "must be 2..1000");
   f.xsph_fraction = r.number("xsph_fraction", f.xsph_fraction);
   r.check("xsph_fraction", f.xsph_fraction >= 0 && f.xsph_fraction <= 0.5, "must be in [0, 0.5]");
+  f.settle_s = r.number("settle_s", f.settle_s);
+  r.check("settle_s", f.settle_s >= 0 && f.settle_s <= 10, "must be in [0, 10] s");
   if (wcsph)
-    for (const char* key : {"density_error_percent", "divergence_error_percent", "max_solver_iterations", "xsph_fraction"})
+    for (const char* key :
+         {"density_error_percent", "divergence_error_percent", "max_solver_iterations", "xsph_fraction", "settle_s"})
       if (r.has(key)) r.problem(key, "applies to solver = \"dfsph\" only (this fluid uses \"wcsph\")");
   f.gravity_m_s2 = r.vec3("gravity_m_s2", f.gravity_m_s2);
   f.look = r.choice<FluidLook>("look", FluidLook::water,

@@ -164,6 +164,7 @@ SimulationModel build_model(const config::Scene& scene) {
     ip.max_divergence_error = static_cast<float>(scene.fluid.divergence_error_percent / 100.0);
     ip.max_iterations = scene.fluid.max_solver_iterations;
     ip.xsph_fraction = static_cast<float>(scene.fluid.xsph_fraction);
+    ip.settle_s = scene.fluid.settle_s;
   }
   p.fluid_viscosity_pa_s = static_cast<float>(scene.fluid.viscosity_pa_s);
   p.gravity_m_s2 = from_config(scene.fluid.gravity_m_s2);

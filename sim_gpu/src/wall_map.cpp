@@ -37,6 +37,11 @@ double half_space_share(double u, double h) {
 
 void WallMap::sample(float x, float y, float z, float& density_hat, float& gx, float& gy, float& gz) const {
   const float p[3] = {x, y, z};
+  // Shares and gradients of the walls within reach. Where walls meet, their half-spaces overlap:
+  // the share of the union is 1 - prod (1 - V_w), exact for a kernel that factorises along the
+  // axes (a Gaussian; the cubic spline is close), so an edge or a corner is not counted twice.
+  float share[6], grad[6];
+  int axis_of[6], n = 0;
   for (int w = 0; w < 6; ++w) {
     if (!enabled[w]) continue;
     const int axis = w / 2;
@@ -46,14 +51,24 @@ void WallMap::sample(float x, float y, float z, float& density_hat, float& gx, f
     const float t = std::clamp((u + h) / du, 0.0f, static_cast<float>(kTableSize - 1) - 1e-3f);
     const int i = static_cast<int>(t);
     const float f = t - static_cast<float>(i);
-    density_hat += share[i] + f * (share[i + 1] - share[i]);
-    const float s = slope[i] + f * (slope[i + 1] - slope[i]);
+    share[n] = this->share[i] + f * (this->share[i + 1] - this->share[i]);
     // The share grows toward the wall: its gradient points out of the fluid, -inward.
-    const float g = -inward * s * gradient_scale;
-    if (axis == 0) gx += g;
-    if (axis == 1) gy += g;
-    if (axis == 2) gz += g;
+    grad[n] = -inward * (slope[i] + f * (slope[i + 1] - slope[i])) * gradient_scale;
+    axis_of[n] = axis;
+    ++n;
   }
+  if (n == 0) return;
+  float outside = 1;  // prod (1 - V_w)
+  for (int k = 0; k < n; ++k) outside *= 1 - share[k];
+  density_hat += 1 - outside;
+  float g[3] = {0, 0, 0};
+  for (int k = 0; k < n; ++k) {
+    float others = 1;
+    for (int o = 0; o < n; ++o)
+      if (o != k) others *= 1 - share[o];
+    g[axis_of[k]] += grad[k] * others;
+  }
+  gx += g[0], gy += g[1], gz += g[2];
 }
 
 WallMap make_wall_map(const float lo[3], const float hi[3], const bool low_wall[3], const bool high_wall[3],

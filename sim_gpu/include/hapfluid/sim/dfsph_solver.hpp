@@ -87,6 +87,9 @@ class DfsphSolver final : public Solver {
   ComputeDevice device() const override;
 
  private:
+  // fluid.settle_s: steps at max_dt_s with the fluid's velocities damped after each and the
+  // bodies held, then the clock, step count, timings and iteration counts start from zero.
+  void settle(double duration_s);
   void sort_and_build_pairs();
   void divergence_solve(float dt);
   void non_pressure_forces(float dt);
@@ -114,6 +117,7 @@ class DfsphSolver final : public Solver {
   std::vector<std::uint64_t> worker_clamped_;
   std::vector<char> worker_touching_;
   bool bodies_touching_ = false;
+  bool settling_ = false;
   double time_s_ = 0;
   std::uint64_t steps_ = 0;
   std::uint64_t clamped_ = 0;

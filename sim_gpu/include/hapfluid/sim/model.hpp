@@ -25,6 +25,7 @@ struct IncompressibleParams {
   int min_iterations = 2;
   int max_iterations = 100;
   float xsph_fraction = 0;              // fluid.xsph_fraction
+  double settle_s = 0;                  // fluid.settle_s
   // Fewer neighbours than this: a particle at the free surface, left out of the divergence solve
   // (its neighbourhood is too thin for a divergence estimate; it would pull the surface apart).
   int min_divergence_neighbours = 20;

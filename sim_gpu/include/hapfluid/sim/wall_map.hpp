@@ -9,8 +9,8 @@
 // Two calibrations make a fluid lattice start exactly at rest: the wall surface sits `offset_m`
 // behind the box face so that a particle of the first layer (half a spacing from the face) has
 // exactly the rest density, and the gradient is scaled so that its pair gradients and the wall's
-// cancel there, as they do in the bulk. Edges and corners add the walls' shares (the overlap of
-// two half-spaces, at most a few percent of a density at an edge, is counted twice).
+// cancel there, as they do in the bulk. Where walls meet, the share of the union of their
+// half-spaces is 1 - prod (1 - V_w) (WallMap::sample).
 #pragma once
 
 #include <vector>
