@@ -65,6 +65,8 @@ void read_limits(Reader& r, DeviceLimits& l) {
   r.positive("max_torque_rate_nm_per_s", l.max_torque_rate_nm_per_s);
   r.positive("max_stiffness_n_per_m", l.max_stiffness_n_per_m);
   r.positive("max_angular_stiffness_nm_per_rad", l.max_angular_stiffness_nm_per_rad);
+  r.positive("max_coupling_damping_n_s_per_m", l.max_coupling_damping_n_s_per_m);
+  r.positive("max_coupling_angular_damping_nm_s_per_rad", l.max_coupling_angular_damping_nm_s_per_rad);
   l.device_damping_n_s_per_m = r.number("device_damping_n_s_per_m", l.device_damping_n_s_per_m);
   r.check("device_damping_n_s_per_m", l.device_damping_n_s_per_m >= 0, "must be >= 0");
 }

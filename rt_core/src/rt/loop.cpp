@@ -42,7 +42,9 @@ RtLoop::PerDevice::PerDevice(const config::RigDevice& d, std::int64_t period_ns)
       interpolator(16'666'667, std::uint64_t(period_ns)),
       mode(d.wrench_mode),
       caps{d.limits.max_stiffness_n_per_m / workspace.linear_gain(),
-           d.limits.max_angular_stiffness_nm_per_rad / workspace.angular_gain()} {}
+           d.limits.max_angular_stiffness_nm_per_rad / workspace.angular_gain(),
+           d.limits.max_coupling_damping_n_s_per_m / workspace.linear_gain(),
+           d.limits.max_coupling_angular_damping_nm_s_per_rad / workspace.angular_gain()} {}
 
 RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Device>> devices, LoopOptions options)
     : rig_(rig) {
@@ -127,7 +129,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   Twist6 scene = d.workspace.to_scene(valid ? device_twist(d.state) : Twist6{});
   const shm::CouplingModel& model = sample_.couplings[index];
   bool coupled = have_sample_ && index < sample_.device_count && model.valid == 1;
-  bool capped = false;
+  std::uint32_t capped = 0;  // flag_stiffness_capped, flag_damping_capped
   safety::Wrench scene_command{};
   if (d.mode == config::WrenchMode::interpolate) {
     if (new_sample) d.interpolator.on_sample(coupled ? safety::Wrench{safety::from(model.force_n), safety::from(model.torque_nm)}
@@ -153,7 +155,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.sim_restarted = d.sim_restarted;
   d.sim_restarted = false;
   safety::SafetyOutput out = d.safety.step(in);
-  if (capped) out.flags |= safety::flag_stiffness_capped;
+  out.flags |= capped;
 
   safety::to(out.wrench.force_n, d.command.force_n);
   safety::to(out.wrench.torque_nm, d.command.torque_nm);

@@ -88,8 +88,8 @@ std::string flag_names(std::uint32_t flags) {
                                       "torque_norm_limited", "torque_axis_limited", "rate_limited",
                                       "passivity_damping", "waiting_to_engage",  "engaging",
                                       "sim_stale_ramp",     "deadman_released",   "stiffness_capped",
-                                      "hard_zero"};
-  return names(flags, table, 13);
+                                      "hard_zero",          "damping_capped"};
+  return names(flags, table, 14);
 }
 
 std::string fault_names(std::uint32_t faults) {

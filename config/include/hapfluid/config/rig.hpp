@@ -45,6 +45,8 @@ struct DeviceLimits {
   double max_torque_rate_nm_per_s = 50.0;
   double max_stiffness_n_per_m = 2000.0;        // caps the coupling-mode K rendered at 1 kHz
   double max_angular_stiffness_nm_per_rad = 5.0;
+  double max_coupling_damping_n_s_per_m = 20.0; // caps the coupling-mode D rendered at 1 kHz
+  double max_coupling_angular_damping_nm_s_per_rad = 0.2;
   double device_damping_n_s_per_m = 2.0;        // physical damping of the arm (passivity bound)
 };
 

@@ -22,6 +22,7 @@ enum Flag : std::uint32_t {
   flag_deadman_released = 1u << 10,
   flag_stiffness_capped = 1u << 11,  // coupling-mode K was reduced to the rig's maximum
   flag_hard_zero = 1u << 12,         // a hard gate (fault, e-stop, deadman) zeroed the output
+  flag_damping_capped = 1u << 13,    // coupling-mode D was reduced to the rig's maximum
 };
 
 enum Fault : std::uint32_t {
