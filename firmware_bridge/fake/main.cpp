@@ -306,7 +306,8 @@ int run(const Options& o) {
     bool info_requested = false;
     if (answering && !in_bus_off) {
       hf_message m;
-      while (link->receive(m) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
+      int budget = device::kDrainUnitBudget;  // a flood from the bus cannot stall the firmware's tick
+      while (link->receive(m, budget) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
     }
     const std::uint64_t received_ns = now_ns();  // after the drain: no command counts as taken before it left the host
     // 2. bus-off injection: error frames exactly as a CAN controller reports them

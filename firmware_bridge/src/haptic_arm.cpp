@@ -94,10 +94,12 @@ bool HapticArm::poll(DeviceState& out) {
   }
   hf_message m;
   std::uint64_t now = 0;
-  while (link_->receive(m) == Io::ok) {
+  int budget = kDrainUnitBudget;
+  while (link_->receive(m, budget) == Io::ok) {
     if (!now) now = monotonic_ns();  // one clock read per poll: all frames of a tick arrived together
     handle(m, now, updated);
   }
+  if (budget == 0) health_.drains_cut_short++;
   if (updated) out = latest_;
   return updated;
 }

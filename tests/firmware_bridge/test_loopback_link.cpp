@@ -46,7 +46,8 @@ struct Rig {
   void device_tick(bool send_state = true, bool corrupt = false) {
     hf_message m;
     firmware->begin_tick();
-    while (device_link->receive(m) == device::Io::ok) firmware->receive(m, t);
+    for (int budget = device::kDrainUnitBudget; device_link->receive(m, budget) == device::Io::ok;)
+      firmware->receive(m, t);
     firmware->step(t, 1e-3, config::PoseTwist{});
     if (firmware->take_new_fault()) {
       std::memset(&m, 0, sizeof m);
@@ -136,6 +137,31 @@ TEST_P(EveryFraming, TheWatchdogFaultReachesTheHost) {
   EXPECT_EQ(ticks_until_seen, 19);
   EXPECT_TRUE(state.status & HF_STATUS_WATCHDOG_TRIPPED);
   EXPECT_EQ(rig.firmware->record().applied_force_n[1], 0.0);
+}
+
+TEST_P(EveryFraming, AFrameFloodCannotHoldThePollingThread) {
+  // Anyone on the bus (or a broken gateway) can send frames faster than the loop drains them. A
+  // poll reads at most kDrainUnitBudget units and returns, so the 1 kHz tick keeps its budget; the
+  // state behind the flood arrives a few polls later, each of which returned on its own.
+  Rig rig(GetParam(), "flood");
+  device::WireFrame junk;
+  switch (GetParam()) {
+    case Framing::can: junk.can_id = 0x054; junk.length = 8; break;  // STATE_POS of node 4, not ours
+    case Framing::canfd: junk.can_id = 0x154; junk.fd = true; junk.length = 48; break;
+    case Framing::hid: junk.data[0] = 1; junk.length = 64; break;  // protocol version 0: rejected
+    case Framing::bulk: junk.length = 38; break;
+  }
+  int flooded = 0;
+  for (int i = 0; i < 3 * device::kDrainUnitBudget; ++i)
+    flooded += rig.device_link->transport().send(junk) == device::Io::ok ? 1 : 0;
+  ASSERT_GT(flooded, device::kDrainUnitBudget) << "the bus took too few frames to flood a poll";
+  rig.device_tick();  // one valid state, behind the flood
+  device::DeviceState state;
+  EXPECT_FALSE(rig.arm->poll(state)) << "one poll drained the whole flood";
+  EXPECT_EQ(rig.arm->health().drains_cut_short, 1u);
+  int polls = 1;
+  while (!rig.arm->poll(state) && polls < 10) ++polls;
+  EXPECT_LT(polls, 10) << "the state behind the flood never arrived";
 }
 
 INSTANTIATE_TEST_SUITE_P(Loopback, EveryFraming,

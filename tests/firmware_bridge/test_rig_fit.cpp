@@ -83,7 +83,7 @@ TEST(RigFit, OpenDeviceRefusesARigThatAsksMoreThanTheDeviceAnsweredWith) {
   std::thread answer([&] {
     while (!done) {
       hf_message m;
-      while (bus->receive(m) == device::Io::ok)
+      for (int budget = device::kDrainUnitBudget; bus->receive(m, budget) == device::Io::ok;)
         if (m.type == HF_MSG_INFO_REQUEST) {
           std::memset(&m, 0, sizeof m);
           m.type = HF_MSG_INFO;
