@@ -16,7 +16,18 @@ std::uint64_t monotonic_ns() {
 
 namespace {
 constexpr std::uint64_t kHeartbeatPeriodNs = 100'000'000;  // protocol.md: heartbeats every 100 ms
+
+// A faulted STATE whose fault bits have not arrived (classic CAN carries them only in FAULT
+// messages, which may be lost or still queued): the fault holds from this very state. The status
+// names the watchdog and the e-stop; any other cause is "internal" until its FAULT message says
+// which, so it stays latched rather than being cleared as a watchdog trip.
+std::uint32_t faults_from_status(std::uint8_t status) {
+  std::uint32_t faults = 0;
+  if (status & HF_STATUS_WATCHDOG_TRIPPED) faults |= HF_FAULT_COMMAND_WATCHDOG;
+  if (status & HF_STATUS_ESTOP_LATCHED) faults |= HF_FAULT_ESTOP;
+  return faults ? faults : HF_FAULT_INTERNAL;
 }
+}  // namespace
 
 HapticArm::HapticArm(std::string name, std::unique_ptr<MessageLink> link, int handshake_ms)
     : name_(std::move(name)), link_(std::move(link)) {
@@ -57,6 +68,7 @@ void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated)
       // classic CAN has no fault byte in STATE: the FAULT messages keep faults_ current
       if (link_->framing() != Framing::can) faults_ = s.fault;
       if (!(s.status & HF_STATUS_FAULTED)) faults_ = 0;
+      else if (!faults_) faults_ = faults_from_status(s.status);
       latest_.fault = faults_;
       health_.frames_ok++;
       health_.last_valid_ns = now_ns;

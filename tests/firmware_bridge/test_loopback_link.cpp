@@ -43,13 +43,13 @@ struct Rig {
                                                     device_link->sequence_modulus());
   }
   // One 1 ms tick of the device: receive, step, send a state (unless told to drop it).
-  void device_tick(bool send_state = true, bool corrupt = false) {
+  void device_tick(bool send_state = true, bool corrupt = false, bool send_fault = true) {
     hf_message m;
     firmware->begin_tick();
     for (int budget = device::kDrainUnitBudget; device_link->receive(m, budget) == device::Io::ok;)
       firmware->receive(m, t);
     firmware->step(t, 1e-3, config::PoseTwist{});
-    if (firmware->take_new_fault()) {
+    if (firmware->take_new_fault() && send_fault) {
       std::memset(&m, 0, sizeof m);
       m.type = HF_MSG_FAULT;
       m.body.fault = firmware->fault_report(t);
@@ -162,6 +162,30 @@ TEST_P(EveryFraming, AFrameFloodCannotHoldThePollingThread) {
   int polls = 1;
   while (!rig.arm->poll(state) && polls < 10) ++polls;
   EXPECT_LT(polls, 10) << "the state behind the flood never arrived";
+}
+
+TEST_P(EveryFraming, AFaultedStatusHoldsAtOnceEvenWhenItsFaultMessageIsLost) {
+  // Classic CAN carries the fault bits only in FAULT messages; the STATE's status bit 1 says
+  // "faulted" in every frame set. When the FAULT message is lost (or still queued), the host
+  // must not render force into a faulted device: the fault holds from that very state, as the
+  // watchdog trip its status names.
+  Rig rig(GetParam(), "faulted");
+  device::DeviceState state;
+  device::DeviceCommand c;
+  c.force_n[1] = 2.0;
+  c.enable = true;
+  for (int tick = 0; tick < 50; ++tick) {
+    rig.arm->send(c);
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  for (int tick = 0; tick < 30 && !(state.status & HF_STATUS_FAULTED); ++tick) {  // host silent
+    rig.device_tick(true, false, /*send_fault=*/false);
+    rig.arm->poll(state);
+  }
+  ASSERT_TRUE(state.status & HF_STATUS_FAULTED) << "the firmware's watchdog did not trip";
+  EXPECT_EQ(state.fault, std::uint32_t(HF_FAULT_COMMAND_WATCHDOG))
+      << "a faulted state without its FAULT message must carry a fault";
 }
 
 INSTANTIATE_TEST_SUITE_P(Loopback, EveryFraming,
