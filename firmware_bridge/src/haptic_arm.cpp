@@ -48,10 +48,29 @@ HapticArm::HapticArm(std::string name, std::unique_ptr<MessageLink> link, int ha
   }
 }
 
+bool HapticArm::accept_state_sequence(std::uint16_t seq) {
+  const std::uint32_t modulus = link_->sequence_modulus();
+  if (hf_seq_accept(&state_seq_, seq, modulus)) {
+    older_run_ = 0;
+    return true;
+  }
+  // A late or repeated state is one of a kind; states that keep coming "older" and counting up
+  // one by one are a device that rebooted and began its counter again. Dropping them until the
+  // counter caught up would hold the device at a link fault for up to half a modulus (32 s).
+  older_run_ = older_run_ > 0 && seq == (older_last_ + 1) % modulus ? older_run_ + 1 : 1;
+  older_last_ = seq;
+  if (older_run_ < kRestartRun) return false;
+  older_run_ = 0;
+  state_seq_.started = 0;  // the new counter is the reference (gaps counted so far are kept)
+  hf_seq_accept(&state_seq_, seq, modulus);
+  health_.device_restarts++;
+  return true;
+}
+
 void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated) {
   switch (m.type) {
     case HF_MSG_STATE: {
-      if (!hf_seq_accept(&state_seq_, m.seq, link_->sequence_modulus())) return;  // late or repeated
+      if (!accept_state_sequence(m.seq)) return;  // late or repeated
       const hf_state& s = m.body.state;
       latest_.host_receive_ns = now_ns;
       latest_.device_time_us = s.device_time_us;

@@ -188,6 +188,55 @@ TEST_P(EveryFraming, AFaultedStatusHoldsAtOnceEvenWhenItsFaultMessageIsLost) {
       << "a faulted state without its FAULT message must carry a fault";
 }
 
+TEST_P(EveryFraming, ADeviceThatRebootsMidRunIsTakenUpWithinAFewStates) {
+  // A device that reboots starts its STATE counter again at 0. Far "behind" the last number seen,
+  // its states would look old and be dropped until the counter caught up: up to 32 s of a live
+  // device held at a link fault. Three states counting up one by one are a restart; the driver
+  // takes the new counter and reports it, so the loop treats it as a link loss.
+  Rig rig(GetParam(), "reboot");
+  rig.state_seq = 30000;  // a device 30 s into its run (the low 8 bits on classic CAN)
+  device::DeviceState state;
+  for (int tick = 0; tick < 20; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  ASSERT_EQ(state.sequence, std::uint16_t(rig.state_seq - 1) % rig.device_link->sequence_modulus());
+  rig.firmware = std::make_unique<fake::FakeFirmware>(fake::DeviceModel{}, config::Pose{},
+                                                      rig.device_link->sequence_modulus());
+  rig.state_seq = 0;  // rebooted
+  int states_until_taken = 0;
+  bool taken = false;
+  while (!taken && states_until_taken < 100) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    ++states_until_taken;
+    taken = rig.arm->poll(state);
+  }
+  EXPECT_EQ(states_until_taken, 3) << "the restarted device's states were dropped as old";
+  EXPECT_EQ(state.sequence, 2u);
+  EXPECT_EQ(rig.arm->health().device_restarts, 1u);
+  rig.device_tick();
+  EXPECT_TRUE(rig.arm->poll(state)) << "and its stream goes on";
+  EXPECT_EQ(rig.arm->health().device_restarts, 1u);
+}
+
+TEST_P(EveryFraming, ALateOrRepeatedStateIsDroppedNotTakenForARestart) {
+  // One old state among new ones (a gateway's retransmission, a reordered frame) is dropped.
+  Rig rig(GetParam(), "late");
+  device::DeviceState state;
+  for (int tick = 0; tick < 10; ++tick) {
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  for (int repeat = 0; repeat < 5; ++repeat) {
+    rig.state_seq = 3;  // the same old state again and again is no counter counting up
+    rig.device_tick();
+    EXPECT_FALSE(rig.arm->poll(state));
+  }
+  EXPECT_EQ(rig.arm->health().device_restarts, 0u);
+}
+
 INSTANTIATE_TEST_SUITE_P(Loopback, EveryFraming,
                          ::testing::Values(Framing::can, Framing::canfd, Framing::hid, Framing::bulk),
                          [](const auto& info) { return std::string(device::to_string(info.param)); });

@@ -17,6 +17,7 @@ namespace {
 class FaultyDevice final : public device::Device {
  public:
   std::uint32_t fault = 0;
+  std::uint32_t restarts = 0;  // health().device_restarts
   bool silent = false;
   device::DeviceCommand last{};
   bool poll(device::DeviceState& out) override {
@@ -33,6 +34,7 @@ class FaultyDevice final : public device::Device {
   device::DeviceHealth health() const override {
     device::DeviceHealth h;
     h.connected = true;
+    h.device_restarts = restarts;
     return h;
   }
   const char* name() const override { return "faulty"; }
@@ -92,4 +94,25 @@ TEST(LoopDeviceFaults, NoClearWithoutAFreshFrame) {
   l.device->silent = true;
   l.ticks(1);
   EXPECT_FALSE(l.device->last.clear_faults);
+}
+
+TEST(LoopDeviceFaults, ADeviceThatRebootedIsTakenUpThroughLinkRecovery) {
+  // A rebooted device forgot the command it applied and starts from its own state: however short
+  // its silence, the loop zeroes the wrench at once and gives it back only after the link was
+  // healthy for link_recover_ms (100 ms; the loop's clock is CLOCK_MONOTONIC), as after any link loss.
+  LoopWithOneDevice l;
+  auto link_invalid = [&] { return (l.loop->last_trace().devices[0].faults & safety::fault_link_invalid) != 0; };
+  l.ticks(3);
+  ASSERT_FALSE(link_invalid());
+  l.device->restarts = 1;
+  const std::uint64_t restart_ns = shm::monotonic_ns();
+  l.ticks(1);
+  EXPECT_TRUE(link_invalid()) << "the restart was not taken as a link loss";
+  EXPECT_FALSE(l.device->last.enable);
+  while (link_invalid() && shm::monotonic_ns() - restart_ns < 2'000'000'000ull) {
+    l.ticks(1);
+    if (link_invalid()) EXPECT_FALSE(l.device->last.enable);
+  }
+  EXPECT_FALSE(link_invalid()) << "never recovered";
+  EXPECT_GE(double(shm::monotonic_ns() - restart_ns) * 1e-6, 100.0) << "recovered before link_recover_ms";
 }

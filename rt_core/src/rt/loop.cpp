@@ -141,13 +141,18 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   }
 
   device::DeviceHealth health = d.device->health();
+  // A device that rebooted lost whatever it had applied; its new stream is taken up like after
+  // any link loss: this state counts as invalid, and link recovery and the engage gate decide
+  // when the wrench returns.
+  const bool restarted = health.device_restarts != d.device_restarts;
+  d.device_restarts = health.device_restarts;
   safety::SafetyInput in;
   in.now_ns = now;
   in.command = d.workspace.to_device(scene_command);
   in.linear_velocity_m_s = safety::from(d.state.linear_velocity_m_s);
   in.angular_velocity_rad_s = safety::from(d.state.angular_velocity_rad_s);
   in.fresh_frame = d.fresh;
-  in.state_valid = valid;
+  in.state_valid = valid && !restarted;
   in.device_fault = d.state.fault != 0 || !health.connected;
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device

@@ -41,6 +41,7 @@ struct DeviceHealth {
   std::uint64_t last_valid_ns = 0;    // CLOCK_MONOTONIC of the newest valid frame
   std::uint32_t transport_errors = 0; // bit set: bus-off, error-passive, disconnected, ...
   std::uint64_t drains_cut_short = 0; // polls that stopped at the drain bound (a frame flood)
+  std::uint32_t device_restarts = 0;  // the device's state counter began again (it rebooted)
   bool connected = false;
 };
 

@@ -98,6 +98,7 @@ class RtLoop {
     device::DeviceCommand command;
     LinkQuality link;
     bool fresh = false;
+    std::uint32_t device_restarts = 0;  // health().device_restarts already taken as a link loss
     bool sim_restarted = false;    // a new sim incarnation's first sample, not yet seen by the safety layer
     safety::Wrench scene_wrench;
   };
