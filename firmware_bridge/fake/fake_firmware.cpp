@@ -78,6 +78,17 @@ bool FakeFirmware::receive(const hf_message& m, double t_s) {
   }
 }
 
+void FakeFirmware::reject_frames(std::uint32_t count, double t_s) {
+  if (count == 0) return;
+  if (bad_window_start_s_ < 0 || (t_s - bad_window_start_s_) * 1e3 > model_.bad_command_window_ms) {
+    bad_window_start_s_ = t_s;
+    bad_in_window_ = 0;
+  }
+  bad_in_window_ += count;
+  if (bad_in_window_ >= static_cast<std::uint32_t>(model_.bad_command_burst))
+    raise(HF_FAULT_BAD_COMMANDS, 2, bad_in_window_);  // detail: invalid frames in the window
+}
+
 void FakeFirmware::step(double t_s, double dt_s, const config::PoseTwist& hand) {
   // Command watchdog: silence of watchdog_ms while enabled -> motors off, latched fault.
   const double silence_ms = last_command_s_ < 0 ? 0 : (t_s - last_command_s_) * 1e3;

@@ -268,6 +268,7 @@ int run(const Options& o) {
   bool bus_off_reported = false, bus_restarted = false;
   double next_heartbeat_s = 0, next_fault_s = 0;
   bool stopped_answering_logged = false;
+  std::uint64_t frames_bad_seen = 0;  // invalid host frames already handed to the firmware
 
   // false: the message never leaves the device (silent, bus-off, delay queue full, link refused).
   auto transmit = [&](hf_message m, double t) {
@@ -308,6 +309,8 @@ int run(const Options& o) {
       hf_message m;
       int budget = device::kDrainUnitBudget;  // a flood from the bus cannot stall the firmware's tick
       while (link->receive(m, budget) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
+      firmware.reject_frames(static_cast<std::uint32_t>(link->frames_bad() - frames_bad_seen), t);
+      frames_bad_seen = link->frames_bad();
     }
     const std::uint64_t received_ns = now_ns();  // after the drain: no command counts as taken before it left the host
     // 2. bus-off injection: error frames exactly as a CAN controller reports them

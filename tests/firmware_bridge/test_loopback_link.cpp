@@ -48,6 +48,8 @@ struct Rig {
     firmware->begin_tick();
     for (int budget = device::kDrainUnitBudget; device_link->receive(m, budget) == device::Io::ok;)
       firmware->receive(m, t);
+    firmware->reject_frames(static_cast<std::uint32_t>(device_link->frames_bad() - frames_bad_seen), t);
+    frames_bad_seen = device_link->frames_bad();
     firmware->step(t, 1e-3, config::PoseTwist{});
     if (firmware->take_new_fault() && send_fault) {
       std::memset(&m, 0, sizeof m);
@@ -69,6 +71,7 @@ struct Rig {
   std::unique_ptr<fake::FakeFirmware> firmware;
   double t = 0;
   std::uint16_t state_seq = 0;
+  std::uint64_t frames_bad_seen = 0;
 };
 
 class EveryFraming : public ::testing::TestWithParam<Framing> {};
@@ -235,6 +238,37 @@ TEST_P(EveryFraming, ALateOrRepeatedStateIsDroppedNotTakenForARestart) {
     EXPECT_FALSE(rig.arm->poll(state));
   }
   EXPECT_EQ(rig.arm->health().device_restarts, 0u);
+}
+
+TEST_P(EveryFraming, ABurstOfBadCommandFramesLatchesTheDevicesBadCommandsFault) {
+  // Ten invalid command frames within 100 ms (a failing transceiver, a broken gateway) and the
+  // device no longer trusts the stream: motors off, HF_FAULT_BAD_COMMANDS latched and reported,
+  // as the host sees in the next state. A stray bad frame now and then is only counted.
+  Rig rig(GetParam(), "badcmd");
+  device::DeviceState state;
+  device::DeviceCommand c;
+  c.force_n[0] = 2.0;
+  c.enable = true;
+  for (int tick = 0; tick < 100; ++tick) {  // one bad command every 20 ms: 5 per 100 ms
+    if (tick % 20 == 0) rig.arm->link().corrupt_next(1);
+    rig.arm->send(c);
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  ASSERT_EQ(rig.firmware->faults(), 0u) << "stray bad frames tripped the device";
+  ASSERT_EQ(rig.firmware->record().applied_force_n[0], 2.0);
+  for (int tick = 0; tick < 10; ++tick) {  // every command of 10 ms bad
+    rig.arm->link().corrupt_next(1);
+    rig.arm->send(c);
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_TRUE(rig.firmware->faults() & HF_FAULT_BAD_COMMANDS);
+  rig.arm->send(c);
+  rig.device_tick();
+  rig.arm->poll(state);
+  EXPECT_EQ(rig.firmware->record().applied_force_n[0], 0.0) << "the motors stay off, good commands or not";
+  EXPECT_TRUE(state.fault & HF_FAULT_BAD_COMMANDS) << "the host hears the cause";
 }
 
 INSTANTIATE_TEST_SUITE_P(Loopback, EveryFraming,
