@@ -109,8 +109,14 @@ void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated)
       has_info_ = true;
       health_.frames_ok++;
       return;
+    case HF_MSG_COMMAND:
+      // Our own frames never come back to us (SocketCAN without CAN_RAW_RECV_OWN_MSGS, the
+      // loopback bus), so a command for our device that we hear was sent by someone else: another
+      // process on this machine or another node on the bus, bypassing our safety layer.
+      health_.foreign_commands++;
+      return;
     default:
-      return;  // host->device messages relayed on a shared bus: not ours to handle
+      return;  // other host->device messages relayed on a shared bus: not ours to handle
   }
 }
 

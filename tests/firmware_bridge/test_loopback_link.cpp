@@ -305,6 +305,36 @@ TEST(LoopbackBus, RelaysHostFramesToAMonitorAndReportsBusOff) {
   EXPECT_FALSE(host.error_flags() & device::kBusOff) << "a restarted controller clears bus-off";
 }
 
+TEST(LoopbackBus, ACommandForOurDeviceThatWeDidNotSendIsCountedAsForeign) {
+  // Any local user can open a raw CAN socket and command our node, bypassing the host's safety
+  // layer. The host hears every frame for its node but never its own: a command it hears is
+  // someone else's, which the driver reports (the loop latches zero force on it).
+  for (Framing framing : {Framing::can, Framing::canfd}) {
+    SCOPED_TRACE(device::to_string(framing));
+    Rig rig(framing, "foreign");
+    device::DeviceState state;
+    for (int tick = 0; tick < 20; ++tick) {
+      rig.arm->send(device::DeviceCommand{});
+      rig.device_tick();
+      rig.arm->poll(state);
+    }
+    EXPECT_EQ(rig.arm->health().foreign_commands, 0u) << "our own commands are not foreign";
+    device::MessageLink intruder(
+        std::make_unique<device::LoopbackTransport>(rig.path, device::LoopbackRole::peer, device::LoopbackFormat::can),
+        framing, 3, device::Side::host);
+    hf_message m;
+    std::memset(&m, 0, sizeof m);
+    m.type = HF_MSG_COMMAND;
+    m.seq = 21;  // just ahead of ours: the device would take it
+    m.body.command.force_n[0] = 20.0;
+    m.body.command.flags = HF_CMD_ENABLE;
+    ASSERT_TRUE(intruder.send(m));
+    rig.device_tick();
+    rig.arm->poll(state);
+    EXPECT_EQ(rig.arm->health().foreign_commands, 1u);
+  }
+}
+
 TEST(LoopbackBus, APeerStartedBeforeItsBusIsDisconnectedUntilTheBusAppears) {
   // The host may come up first (a device powered on later, a fake device restarted last): its
   // link reports kDisconnected, without blocking, and connects by itself once the bus is there.

@@ -18,6 +18,7 @@ class FaultyDevice final : public device::Device {
  public:
   std::uint32_t fault = 0;
   std::uint32_t restarts = 0;  // health().device_restarts
+  std::uint64_t foreign = 0;   // health().foreign_commands
   bool silent = false;
   device::DeviceCommand last{};
   bool poll(device::DeviceState& out) override {
@@ -35,6 +36,7 @@ class FaultyDevice final : public device::Device {
     device::DeviceHealth h;
     h.connected = true;
     h.device_restarts = restarts;
+    h.foreign_commands = foreign;
     return h;
   }
   const char* name() const override { return "faulty"; }
@@ -115,4 +117,24 @@ TEST(LoopDeviceFaults, ADeviceThatRebootedIsTakenUpThroughLinkRecovery) {
   }
   EXPECT_FALSE(link_invalid()) << "never recovered";
   EXPECT_GE(double(shm::monotonic_ns() - restart_ns) * 1e-6, 100.0) << "recovered before link_recover_ms";
+}
+
+TEST(LoopDeviceFaults, AForeignCommandLatchesTheDeviceAtZeroUntilTheOperatorResets) {
+  // The driver heard a command for our device that we did not send: the loop zeroes and disables
+  // that device at once, names the cause (foreign_command, in the trace and the flight recorder's
+  // file name) and keeps it so until the operator's reset (SIGUSR2).
+  LoopWithOneDevice l;
+  auto foreign = [&] { return (l.loop->last_trace().devices[0].faults & safety::fault_foreign_command) != 0; };
+  l.ticks(3);
+  ASSERT_FALSE(foreign());
+  l.device->foreign = 1;
+  l.ticks(1);
+  EXPECT_TRUE(foreign());
+  EXPECT_FALSE(l.device->last.enable);
+  EXPECT_EQ(l.device->last.force_n[0], 0.0);
+  l.ticks(200);
+  EXPECT_TRUE(foreign()) << "cleared without the operator";
+  l.loop->request_estop_reset();
+  l.ticks(1);
+  EXPECT_FALSE(foreign());
 }

@@ -224,6 +224,33 @@ TEST(SafetyLayer, DeadmanReleaseZeroesImmediatelyWhenRequired) {
   EXPECT_TRUE(out.flags & flag_deadman_released);
 }
 
+TEST(SafetyLayer, AForeignCommandLatchesZeroUntilTheOperatorResets) {
+  // Someone else commanding our device (another process on the machine, another node on the
+  // bus) bypasses every rule here: whoever it is, force stays off until an operator has looked.
+  Harness h;
+  SafetyOutput out = h.settle({{0.5, 0, 0}, {}});
+  ASSERT_GT(out.wrench.force_n.x, 0.4);
+  SafetyInput in;
+  in.now_ns = (h.now_ns += kTickNs);
+  in.command = {{0.5, 0, 0}, {}};
+  in.fresh_frame = true;
+  in.sim_age_ms = 0;
+  in.deadman_pressed = true;
+  in.foreign_command = true;
+  out = h.layer.step(in);
+  EXPECT_EQ(out.wrench, Wrench{}) << "zero at once, not ramped";
+  EXPECT_FALSE(out.enable);
+  EXPECT_TRUE(out.faults & fault_foreign_command);
+  EXPECT_EQ(fault_names(out.faults & fault_foreign_command), "foreign_command") << "the cause is named";
+  for (int i = 0; i < 1000; ++i) out = h.tick({{0.5, 0, 0}, {}});  // 1 s of healthy, quiet link
+  EXPECT_TRUE(out.faults & fault_foreign_command) << "latched: it does not clear by itself";
+  EXPECT_EQ(out.wrench, Wrench{});
+  EXPECT_TRUE(h.layer.reset_estop());
+  for (int i = 0; i < 300; ++i) out = h.tick({{0.5, 0, 0}, {}});
+  EXPECT_FALSE(out.faults & fault_foreign_command);
+  EXPECT_NEAR(out.wrench.force_n.x, 0.5, 1e-9) << "force returns through the engage gate";
+}
+
 TEST(SafetyLayer, EstopLatchesUntilAnExplicitResetWithTheButtonReleased) {
   Harness h;
   SafetyOutput out = h.settle({{0.5, 0, 0}, {}});

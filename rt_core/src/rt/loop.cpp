@@ -146,6 +146,8 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   // when the wrench returns.
   const bool restarted = health.device_restarts != d.device_restarts;
   d.device_restarts = health.device_restarts;
+  const bool foreign = health.foreign_commands != d.foreign_commands;
+  d.foreign_commands = health.foreign_commands;
   safety::SafetyInput in;
   in.now_ns = now;
   in.command = d.workspace.to_device(scene_command);
@@ -156,6 +158,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.device_fault = d.state.fault != 0 || !health.connected;
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
+  in.foreign_command = foreign;
   in.sim_age_ms = sim_age_ms(now);
   in.sim_restarted = d.sim_restarted;
   d.sim_restarted = false;

@@ -93,8 +93,9 @@ std::string flag_names(std::uint32_t flags) {
 }
 
 std::string fault_names(std::uint32_t faults) {
-  static const char* const table[] = {"estop", "link_timeout", "link_invalid", "device_reported", "sim_stale"};
-  return names(faults, table, 5);
+  static const char* const table[] = {"estop",     "link_timeout", "link_invalid", "device_reported",
+                                      "sim_stale", "foreign_command"};
+  return names(faults, table, 6);
 }
 
 }  // namespace hapfluid::safety

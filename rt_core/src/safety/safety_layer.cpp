@@ -89,6 +89,7 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   if (in.estop_input || estop_requested_) estop_latched_ = true;
   estop_requested_ = false;
   if (estop_latched_) faults_ |= fault_estop;
+  if (in.foreign_command) faults_ |= fault_foreign_command;
   update_link(checked);
 
   // 1-3: sanitize, passivity, limits.
@@ -157,7 +158,7 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
 bool SafetyLayer::reset_estop() {
   if (estop_input_held_) return false;
   estop_latched_ = false;
-  faults_ &= ~fault_estop;
+  faults_ &= ~(fault_estop | fault_foreign_command);
   return true;
 }
 

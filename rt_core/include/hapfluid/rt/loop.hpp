@@ -99,6 +99,7 @@ class RtLoop {
     LinkQuality link;
     bool fresh = false;
     std::uint32_t device_restarts = 0;  // health().device_restarts already taken as a link loss
+    std::uint64_t foreign_commands = 0; // health().foreign_commands already latched
     bool sim_restarted = false;    // a new sim incarnation's first sample, not yet seen by the safety layer
     safety::Wrench scene_wrench;
   };

@@ -31,6 +31,8 @@ enum Fault : std::uint32_t {
   fault_link_invalid = 1u << 2,      // the device delivered a non-finite/invalid state
   fault_device_reported = 1u << 3,   // the device's own fault bits are set or it is disconnected
   fault_sim_stale = 1u << 4,         // no fresh sim sample within sim_stale_ms (ramps, not a hard zero)
+  fault_foreign_command = 1u << 5,   // a command for this device that we did not send was heard on
+                                     // its bus; latched, cleared only by the operator reset
 };
 
 // "force_norm_limited|rate_limited"; "-" for none.

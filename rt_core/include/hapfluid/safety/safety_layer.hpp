@@ -22,12 +22,14 @@
 //                                so the rise is deliberate and step 6 never has to shape it.
 //   6. rate limit                change per tick <= max_*_rate * period (uniform scaling, so the
 //                                limits of step 3 still hold).
-//   7. hard gates                latched e-stop, link timeout/invalid state, device fault, deadman
+//   7. hard gates                latched e-stop or foreign command, link timeout/invalid state, device fault, deadman
 //                                released (when required) -> exactly zero at once, bypassing the
 //                                rate limit: zero is always the safe command.
 //   8. passivity observer        accounts for the wrench actually sent.
 //
-// Recovery rules: e-stop needs reset_estop() while the e-stop input is released; link faults
+// Recovery rules: e-stop needs reset_estop() while the e-stop input is released, and so does a
+// foreign command (someone else commanding our device: whoever it is, the operator must look
+// before force returns); link faults
 // clear after link_recover_ms of healthy frames, then the wrench re-engages through step 5;
 // sim staleness clears with the first fresh sample and resumes through the step-4 ramp when it is
 // the same sim, late (a stall: its bodies and couplings carry on from where the hand left them);
@@ -57,6 +59,7 @@ struct SafetyInput {
   bool device_fault = false;       // device-reported fault bits, or the transport is disconnected
   bool deadman_pressed = false;
   bool estop_input = false;        // e-stop button / operator request (latches)
+  bool foreign_command = false;    // someone else sent this device a command (latches)
   double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
   bool sim_restarted = false;      // this tick's sample is the first from a new sim (or the first ever)
 };
@@ -76,7 +79,8 @@ class SafetyLayer {
   SafetyLayer& operator=(const SafetyLayer&) = delete;
 
   SafetyOutput step(const SafetyInput& input);
-  // Explicit operator reset of a latched e-stop; refused (false) while the e-stop input is held.
+  // Explicit operator reset of a latched e-stop and a latched foreign-command fault; refused
+  // (false) while the e-stop input is held.
   bool reset_estop();
   // Operator request: latches the e-stop on the next step.
   void request_estop() { estop_requested_ = true; }
