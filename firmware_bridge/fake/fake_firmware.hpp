@@ -25,6 +25,10 @@ struct DeviceModel {
   double workspace_half_extent_m = 0.30;        // box walls, per axis
   double max_force_n = 12.0;                    // motor limits (norm)
   double max_torque_nm = 0.8;
+  // The motors' own rate limits: a change of applied force beyond them per tick is scaled down
+  // (direction kept), whoever commanded it; going to zero (motors off, a fault) is never limited.
+  double max_force_rate_n_per_s = 2000.0;
+  double max_torque_rate_nm_per_s = 100.0;
   int watchdog_ms = 20;                         // no valid command for this long -> motors off
   // A burst of invalid frames from the host (CRC, range, reserved bits: a failing transceiver, a
   // broken gateway, someone else's traffic) means the commands cannot be trusted: this many
@@ -96,6 +100,8 @@ class FakeFirmware {
   double bad_window_start_s_ = -1;    // the burst window of reject_frames
   std::uint32_t bad_in_window_ = 0;
   bool saturated_ = false;
+  double applied_force_[3] = {0, 0, 0};  // what the motors pushed last tick (the rate limit's start)
+  double applied_torque_[3] = {0, 0, 0};
   bool at_wall_ = false;
   bool motors_on_ = false;
   std::uint64_t commands_applied_ = 0;

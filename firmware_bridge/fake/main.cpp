@@ -212,6 +212,10 @@ int run(const Options& o) {
   model.watchdog_ms = static_cast<int>(std::lround(d.watchdogs.device_watchdog_ms));
   model.max_force_n = d.limits.max_force_n;
   model.max_torque_nm = d.limits.max_torque_nm;
+  // Twice the host's: a host within its own limit never meets the device's, even when two of
+  // its commands land in one device tick; a sender bypassing the host does.
+  model.max_force_rate_n_per_s = 2 * d.limits.max_force_rate_n_per_s;
+  model.max_torque_rate_nm_per_s = 2 * d.limits.max_torque_rate_nm_per_s;
   model.handle_damping_n_s_per_m = d.limits.device_damping_n_s_per_m;
 
   config::Pose start;
