@@ -110,6 +110,8 @@ void read_watchdogs(Reader& r, Watchdogs& w) {
   r.check("engage_ramp_rate_nm_per_s", w.engage_ramp_rate_nm_per_s >= 0,
           "must be >= 0 (0: derived from engage_ramp_rate_n_per_s)");
   r.positive("device_watchdog_ms", w.device_watchdog_ms);
+  r.positive("lost_command_window_ms", w.lost_command_window_ms);
+  r.positive("max_lost_commands", w.max_lost_commands);
   r.check("device_watchdog_ms", w.device_watchdog_ms <= HF_WIRE_MAX_WATCHDOG_MS,
           "must be <= 255 ms, the most a device reports in its INFO (firmware_bridge/protocol.md 2)");
 }

@@ -167,6 +167,25 @@ TEST_P(EveryFraming, AFrameFloodCannotHoldThePollingThread) {
   EXPECT_LT(polls, 10) << "the state behind the flood never arrived";
 }
 
+TEST_P(EveryFraming, CommandsTheDeviceNeverAppliedAreCountedFromItsEcho) {
+  // Every 4th command is lost on the way (discarded before the firmware sees it): the echo of the
+  // next state skips it, and the driver counts it. 25 lost in 100 ticks; the last, on tick 99,
+  // shows only when a later command is applied.
+  Rig rig(GetParam(), "lostcmd");
+  device::DeviceState state;
+  for (int tick = 0; tick < 100; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    if (tick % 4 == 3) {
+      hf_message m;
+      for (int budget = device::kDrainUnitBudget; rig.device_link->receive(m, budget) == device::Io::ok;) {
+      }
+    }
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_EQ(rig.arm->health().commands_lost, 24u);
+}
+
 TEST_P(EveryFraming, AFaultedStatusHoldsAtOnceEvenWhenItsFaultMessageIsLost) {
   // Classic CAN carries the fault bits only in FAULT messages; the STATE's status bit 1 says
   // "faulted" in every frame set. When the FAULT message is lost (or still queued), the host

@@ -19,6 +19,7 @@ class FaultyDevice final : public device::Device {
   std::uint32_t fault = 0;
   std::uint32_t restarts = 0;  // health().device_restarts
   std::uint64_t foreign = 0;   // health().foreign_commands
+  std::uint64_t lost = 0;      // health().commands_lost
   bool silent = false;
   device::DeviceCommand last{};
   bool poll(device::DeviceState& out) override {
@@ -37,6 +38,7 @@ class FaultyDevice final : public device::Device {
     h.connected = true;
     h.device_restarts = restarts;
     h.foreign_commands = foreign;
+    h.commands_lost = lost;
     return h;
   }
   const char* name() const override { return "faulty"; }
@@ -137,4 +139,28 @@ TEST(LoopDeviceFaults, AForeignCommandLatchesTheDeviceAtZeroUntilTheOperatorRese
   l.loop->request_estop_reset();
   l.ticks(1);
   EXPECT_FALSE(foreign());
+}
+
+TEST(LoopDeviceFaults, CommandsTheDeviceNeverAppliedCountTowardTheCommunicationConstraint) {
+  // The driver counts the commands the device's echo skipped; the loop hands each tick's new
+  // ones to the safety layer, which latches the fault beyond 50 (rig default) until the reset.
+  LoopWithOneDevice l;
+  auto violated = [&] {
+    return (l.loop->last_trace().devices[0].faults & safety::fault_communication_constraints) != 0;
+  };
+  l.device->lost = 1000;  // lost before the loop's first tick: not this run's
+  l.ticks(3);
+  EXPECT_TRUE(violated()) << "the first tick takes the driver's whole count";
+  l.loop->request_estop_reset();
+  l.ticks(1);
+  ASSERT_FALSE(violated());
+  l.device->lost += 30;
+  l.ticks(1);
+  EXPECT_FALSE(violated());
+  l.device->lost += 30;  // 60 within 1 ms of loop ticks
+  l.ticks(1);
+  EXPECT_TRUE(violated());
+  EXPECT_FALSE(l.device->last.enable);
+  l.ticks(100);
+  EXPECT_TRUE(violated()) << "cleared without the operator";
 }

@@ -148,6 +148,8 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   d.device_restarts = health.device_restarts;
   const bool foreign = health.foreign_commands != d.foreign_commands;
   d.foreign_commands = health.foreign_commands;
+  const auto lost = static_cast<std::uint32_t>(health.commands_lost - d.commands_lost);
+  d.commands_lost = health.commands_lost;
   safety::SafetyInput in;
   in.now_ns = now;
   in.command = d.workspace.to_device(scene_command);
@@ -159,6 +161,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
   in.foreign_command = foreign;
+  in.commands_lost = lost;
   in.sim_age_ms = sim_age_ms(now);
   in.sim_restarted = d.sim_restarted;
   d.sim_restarted = false;

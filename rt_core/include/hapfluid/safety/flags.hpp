@@ -33,6 +33,8 @@ enum Fault : std::uint32_t {
   fault_sim_stale = 1u << 4,         // no fresh sim sample within sim_stale_ms (ramps, not a hard zero)
   fault_foreign_command = 1u << 5,   // a command for this device that we did not send was heard on
                                      // its bus; latched, cleared only by the operator reset
+  fault_communication_constraints = 1u << 6,  // too many commands lost (libfranka's
+                                     // communication_constraints_violation); latched like the above
 };
 
 // "force_norm_limited|rate_limited"; "-" for none.

@@ -29,7 +29,8 @@
 //
 // Recovery rules: e-stop needs reset_estop() while the e-stop input is released, and so does a
 // foreign command (someone else commanding our device: whoever it is, the operator must look
-// before force returns); link faults
+// before force returns), and so does a communication-constraint violation (more lost commands
+// than max_lost_commands, in a bucket draining that many per lost_command_window_ms); link faults
 // clear after link_recover_ms of healthy frames, then the wrench re-engages through step 5;
 // sim staleness clears with the first fresh sample and resumes through the step-4 ramp when it is
 // the same sim, late (a stall: its bodies and couplings carry on from where the hand left them);
@@ -60,6 +61,7 @@ struct SafetyInput {
   bool deadman_pressed = false;
   bool estop_input = false;        // e-stop button / operator request (latches)
   bool foreign_command = false;    // someone else sent this device a command (latches)
+  std::uint32_t commands_lost = 0; // commands the device reported not applied since the last step
   double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
   bool sim_restarted = false;      // this tick's sample is the first from a new sim (or the first ever)
 };
@@ -105,6 +107,7 @@ class SafetyLayer {
   bool estop_requested_ = false;
   bool estop_input_held_ = false;
   bool seen_frame_ = false;
+  double lost_bucket_ = 0;         // lost commands, draining max_lost_commands per window
   std::uint64_t last_fresh_ns_ = 0;
   std::uint64_t last_now_ns_ = 0;
   std::uint64_t healthy_since_ns_ = 0;
