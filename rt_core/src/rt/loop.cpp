@@ -54,6 +54,11 @@ RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Devic
   for (std::size_t i = 0; i < devices.size(); ++i) {
     devices_.push_back(std::make_unique<PerDevice>(rig.devices[i], rig.rt.period_ns));
     devices_.back()->device = std::move(devices[i]);
+    // Counts from before the loop are not this run's (a foreign command heard at open is: it
+    // still latches on the first tick).
+    const device::DeviceHealth health = devices_.back()->device->health();
+    devices_.back()->device_restarts = health.device_restarts;
+    devices_.back()->commands_lost = health.commands_lost;
     auto& entry = states_record_.devices[i];
     std::strncpy(entry.name, rig.devices[i].name.c_str(), sizeof entry.name - 1);
     entry.present = 1;
