@@ -68,16 +68,18 @@ bool HapticArm::accept_state_sequence(std::uint16_t seq) {
   return true;
 }
 
-void HapticArm::count_lost_commands(std::uint8_t echo) {
+void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks) {
   // The echo names the newest command the device applied (low 8 bits). When it moves on by more
-  // than one, the commands between never reached the motors: lost on the link, or superseded in
-  // one device tick. Only echoes of our own recent commands count (a device still echoing a
-  // previous host's, or one just restarted, says nothing about ours).
+  // than the device ticks since the last state we got (states lost on the way are ticks too), the
+  // commands between never reached the motors: lost on the link, or superseded in one device
+  // tick. Only echoes of our own recent commands count (a device still echoing a previous host's,
+  // or one just restarted, says nothing about ours).
   constexpr unsigned kRecent = 64;
   const auto newest = static_cast<std::uint8_t>(command_seq_ - 1);
   const bool ours = health_.commands_sent > 0 && static_cast<std::uint8_t>(newest - echo) < kRecent;
   const auto advance = static_cast<std::uint8_t>(echo - last_echo_);
-  if (ours && last_echo_ours_ && advance > 1 && advance < kRecent) health_.commands_lost += advance - 1u;
+  if (ours && last_echo_ours_ && advance > device_ticks && advance < kRecent)
+    health_.commands_lost += advance - device_ticks;
   last_echo_ = echo;
   last_echo_ours_ = ours;
 }
@@ -85,13 +87,14 @@ void HapticArm::count_lost_commands(std::uint8_t echo) {
 void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated) {
   switch (m.type) {
     case HF_MSG_STATE: {
+      const std::uint32_t gaps_before = state_seq_.gaps;
       if (!accept_state_sequence(m.seq)) return;  // late or repeated
       const hf_state& s = m.body.state;
       latest_.host_receive_ns = now_ns;
       latest_.device_time_us = s.device_time_us;
       latest_.sequence = m.seq;
       latest_.command_echo = s.command_echo;
-      count_lost_commands(s.command_echo);
+      count_lost_commands(s.command_echo, state_seq_.gaps - gaps_before + 1);
       for (int i = 0; i < 3; ++i) {
         latest_.position_m[i] = s.position_m[i];
         latest_.linear_velocity_m_s[i] = s.linear_velocity_m_s[i];
@@ -144,6 +147,7 @@ bool HapticArm::poll(DeviceState& out) {
     // dropping up to half a modulus of states as "older" (gaps counted so far are kept).
     reconnects_seen_ = r;
     state_seq_.started = 0;
+    older_run_ = 0;
     last_echo_ours_ = false;
   }
   hf_message m;

@@ -116,6 +116,8 @@ TEST_P(EveryFraming, CorruptedAndDroppedStatesAreCountedNotUsed) {
   // a corrupted state and a dropped one both leave holes in the sequence; the first corrupt
   // state precedes the first valid one, so it is not a gap
   EXPECT_EQ(h.sequence_gaps, 19u);
+  // every command was applied: an echo that moved on by two across a missing state is no loss
+  EXPECT_EQ(h.commands_lost, 0u);
 }
 
 TEST_P(EveryFraming, TheWatchdogFaultReachesTheHost) {

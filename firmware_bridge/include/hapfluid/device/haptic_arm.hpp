@@ -31,8 +31,9 @@ class HapticArm final : public Device {
   void handle(const hf_message& message, std::uint64_t now_ns, bool& updated);
   // STATE sequence check; takes up a device whose counter restarted (health().device_restarts).
   bool accept_state_sequence(std::uint16_t seq);
-  // Counts the commands the device's echo skipped (health().commands_lost).
-  void count_lost_commands(std::uint8_t echo);
+  // Counts the commands the device's echo skipped (health().commands_lost); `device_ticks`: the
+  // device's states since the last one received (1, or more when states were lost).
+  void count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks);
   // This many consecutive "older" states, each one after the other, mean a restarted counter.
   static constexpr std::uint32_t kRestartRun = 3;
 
