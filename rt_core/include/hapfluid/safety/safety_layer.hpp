@@ -22,7 +22,8 @@
 //                                so the rise is deliberate and step 6 never has to shape it.
 //   6. rate limit                change per tick <= max_*_rate * period (uniform scaling, so the
 //                                limits of step 3 still hold).
-//   7. hard gates                latched e-stop or foreign command, link timeout/invalid state, device fault, deadman
+//   7. hard gates                latched e-stop, foreign command or communication-constraint
+//                                violation, link timeout/invalid state, device fault, deadman
 //                                released (when required) -> exactly zero at once, bypassing the
 //                                rate limit: zero is always the safe command.
 //   8. passivity observer        accounts for the wrench actually sent.
