@@ -1,10 +1,13 @@
 // Rig file schema and validation. docs/config-reference.md documents every key.
 #include "hapfluid/config/rig.hpp"
 
+#include <algorithm>
+#include <cstdio>
 #include <set>
 
 #include "load_toml.hpp"
 #include "toml_reader.hpp"
+#include "hapfluid/wire/codec.h"
 
 namespace hapfluid::config {
 namespace {
@@ -61,10 +64,27 @@ void read_limits(Reader& r, DeviceLimits& l) {
   l.max_torque_axis_nm = r.vec3("max_torque_axis_nm", l.max_torque_axis_nm);
   for (auto [key, v] : {std::pair{"max_force_axis_n", l.max_force_axis_n}, {"max_torque_axis_nm", l.max_torque_axis_nm}})
     if (r.has(key)) r.check(key, v.x > 0 && v.y > 0 && v.z > 0, "every component must be > 0");
+  // The wire carries each axis of the wrench up to its full scale: a limit beyond it promises a
+  // force the host can never send (the encoder refuses it, and a disabled zero goes instead).
+  char wire[96];
+  std::snprintf(wire, sizeof wire, "must be <= %g N, the full scale of the wire (firmware_bridge/protocol.md 1.2)",
+                HF_WIRE_MAX_FORCE_N);
+  r.check("max_force_n", l.max_force_n <= HF_WIRE_MAX_FORCE_N, wire);
+  if (r.has("max_force_axis_n"))
+    r.check("max_force_axis_n", std::max({l.max_force_axis_n.x, l.max_force_axis_n.y, l.max_force_axis_n.z}) <=
+                                    HF_WIRE_MAX_FORCE_N, std::string("every component ") + wire);
+  std::snprintf(wire, sizeof wire, "must be <= %g N*m, the full scale of the wire (firmware_bridge/protocol.md 1.2)",
+                HF_WIRE_MAX_TORQUE_NM);
+  r.check("max_torque_nm", l.max_torque_nm <= HF_WIRE_MAX_TORQUE_NM, wire);
+  if (r.has("max_torque_axis_nm"))
+    r.check("max_torque_axis_nm", std::max({l.max_torque_axis_nm.x, l.max_torque_axis_nm.y, l.max_torque_axis_nm.z}) <=
+                                      HF_WIRE_MAX_TORQUE_NM, std::string("every component ") + wire);
   r.positive("max_force_rate_n_per_s", l.max_force_rate_n_per_s);
   r.positive("max_torque_rate_nm_per_s", l.max_torque_rate_nm_per_s);
   r.positive("max_stiffness_n_per_m", l.max_stiffness_n_per_m);
   r.positive("max_angular_stiffness_nm_per_rad", l.max_angular_stiffness_nm_per_rad);
+  r.positive("max_coupling_damping_n_s_per_m", l.max_coupling_damping_n_s_per_m);
+  r.positive("max_coupling_angular_damping_nm_s_per_rad", l.max_coupling_angular_damping_nm_s_per_rad);
   l.device_damping_n_s_per_m = r.number("device_damping_n_s_per_m", l.device_damping_n_s_per_m);
   r.check("device_damping_n_s_per_m", l.device_damping_n_s_per_m >= 0, "must be >= 0");
 }
@@ -90,6 +110,10 @@ void read_watchdogs(Reader& r, Watchdogs& w) {
   r.check("engage_ramp_rate_nm_per_s", w.engage_ramp_rate_nm_per_s >= 0,
           "must be >= 0 (0: derived from engage_ramp_rate_n_per_s)");
   r.positive("device_watchdog_ms", w.device_watchdog_ms);
+  r.positive("lost_command_window_ms", w.lost_command_window_ms);
+  r.positive("max_lost_commands", w.max_lost_commands);
+  r.check("device_watchdog_ms", w.device_watchdog_ms <= HF_WIRE_MAX_WATCHDOG_MS,
+          "must be <= 255 ms, the most a device reports in its INFO (firmware_bridge/protocol.md 2)");
 }
 
 RigDevice read_device(Reader& r) {

@@ -51,7 +51,7 @@ std::vector<double> run(Framing framing, int iterations) {
     state.body.state.orientation[0] = 1;
     while (!stop) {
       if (!wait(device.transport(), 50)) continue;
-      while (device.receive(m) == Io::ok) {
+      for (int budget = kDrainUnitBudget; device.receive(m, budget) == Io::ok;) {
         if (m.type != HF_MSG_COMMAND) continue;
         state.body.state.command_echo = static_cast<std::uint8_t>(m.seq);
         state.seq = m.seq;
@@ -71,7 +71,8 @@ std::vector<double> run(Framing framing, int iterations) {
     host.send(command);
     bool got = false;
     while (!got && wait(host.transport(), 100))
-      while (host.receive(reply) == Io::ok) got = got || (reply.type == HF_MSG_STATE && reply.body.state.command_echo == (i & 0xFF));
+      for (int budget = kDrainUnitBudget; host.receive(reply, budget) == Io::ok;)
+        got = got || (reply.type == HF_MSG_STATE && reply.body.state.command_echo == (i & 0xFF));
     if (got && i >= 100) rtt_us.push_back((now_ns() - t0) * 1e-3);  // the first 100 warm up
   }
   stop = true;

@@ -16,6 +16,19 @@ bool limit_norm(double v[3], double limit) {
   return true;
 }
 
+// Moves `previous` toward `target` by at most `max_step` in norm (direction of the change kept);
+// writes the result to `target`.
+void limit_step(double target[3], const double previous[3], double max_step) {
+  double change[3], n = 0;
+  for (int i = 0; i < 3; ++i) {
+    change[i] = target[i] - previous[i];
+    n += change[i] * change[i];
+  }
+  n = std::sqrt(n);
+  if (n <= max_step) return;
+  for (int i = 0; i < 3; ++i) target[i] = previous[i] + change[i] * (max_step / n);
+}
+
 // Rotation vector of a * conj(b): the small rotation that takes b to a (world frame).
 void rotation_error(const double a[4], const double b[4], double out[3]) {
   // q = a * conj(b)
@@ -78,6 +91,17 @@ bool FakeFirmware::receive(const hf_message& m, double t_s) {
   }
 }
 
+void FakeFirmware::reject_frames(std::uint32_t count, double t_s) {
+  if (count == 0) return;
+  if (bad_window_start_s_ < 0 || (t_s - bad_window_start_s_) * 1e3 > model_.bad_command_window_ms) {
+    bad_window_start_s_ = t_s;
+    bad_in_window_ = 0;
+  }
+  bad_in_window_ += count;
+  if (bad_in_window_ >= static_cast<std::uint32_t>(model_.bad_command_burst))
+    raise(HF_FAULT_BAD_COMMANDS, 2, bad_in_window_);  // detail: invalid frames in the window
+}
+
 void FakeFirmware::step(double t_s, double dt_s, const config::PoseTwist& hand) {
   // Command watchdog: silence of watchdog_ms while enabled -> motors off, latched fault.
   const double silence_ms = last_command_s_ < 0 ? 0 : (t_s - last_command_s_) * 1e3;
@@ -97,6 +121,14 @@ void FakeFirmware::step(double t_s, double dt_s, const config::PoseTwist& hand) 
   }
   saturated_ = limit_norm(force, model_.max_force_n);
   saturated_ = limit_norm(torque, model_.max_torque_nm) || saturated_;
+  // The rate limit holds against any sender (a foreign command on the bus included); the step
+  // to zero when the motors go off is the safe one and is taken at once.
+  if (motors_on_) {
+    limit_step(force, applied_force_, model_.max_force_rate_n_per_s * dt_s);
+    limit_step(torque, applied_torque_, model_.max_torque_rate_nm_per_s * dt_s);
+  }
+  std::memcpy(applied_force_, force, sizeof force);
+  std::memcpy(applied_torque_, torque, sizeof torque);
 
   // Translation: m a = F_motor + K_h (x_hand - x) + D_h (v_hand - v) - b v (semi-implicit Euler).
   const double target[3] = {hand.pose.position_m.x, hand.pose.position_m.y, hand.pose.position_m.z};

@@ -25,7 +25,16 @@ struct DeviceModel {
   double workspace_half_extent_m = 0.30;        // box walls, per axis
   double max_force_n = 12.0;                    // motor limits (norm)
   double max_torque_nm = 0.8;
+  // The motors' own rate limits: a change of applied force beyond them per tick is scaled down
+  // (direction kept), whoever commanded it; going to zero (motors off, a fault) is never limited.
+  double max_force_rate_n_per_s = 2000.0;
+  double max_torque_rate_nm_per_s = 100.0;
   int watchdog_ms = 20;                         // no valid command for this long -> motors off
+  // A burst of invalid frames from the host (CRC, range, reserved bits: a failing transceiver, a
+  // broken gateway, someone else's traffic) means the commands cannot be trusted: this many
+  // within bad_command_window_ms latch HF_FAULT_BAD_COMMANDS, motors off.
+  int bad_command_burst = 10;
+  double bad_command_window_ms = 100.0;
 };
 
 // What happened in one tick; the CSV log writes it.
@@ -50,6 +59,8 @@ class FakeFirmware {
   // A message from the host at time `t_s`. Returns true when it asks for an immediate answer
   // (INFO_REQUEST), which the caller sends with info().
   bool receive(const hf_message& message, double t_s);
+  // `count` invalid frames from the host arrived at `t_s` (the link counted and skipped them).
+  void reject_frames(std::uint32_t count, double t_s);
   // Advances the dynamics by dt towards the hand's target; applies watchdog and limits.
   void step(double t_s, double dt_s, const config::PoseTwist& hand_target);
 
@@ -86,7 +97,11 @@ class FakeFirmware {
   std::uint8_t fault_cause_ = 0;
   std::uint32_t fault_detail_ = 0;
   bool new_fault_ = false;
+  double bad_window_start_s_ = -1;    // the burst window of reject_frames
+  std::uint32_t bad_in_window_ = 0;
   bool saturated_ = false;
+  double applied_force_[3] = {0, 0, 0};  // what the motors pushed last tick (the rate limit's start)
+  double applied_torque_[3] = {0, 0, 0};
   bool at_wall_ = false;
   bool motors_on_ = false;
   std::uint64_t commands_applied_ = 0;

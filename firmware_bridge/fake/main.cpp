@@ -212,6 +212,10 @@ int run(const Options& o) {
   model.watchdog_ms = static_cast<int>(std::lround(d.watchdogs.device_watchdog_ms));
   model.max_force_n = d.limits.max_force_n;
   model.max_torque_nm = d.limits.max_torque_nm;
+  // Twice the host's: a host within its own limit never meets the device's, even when two of
+  // its commands land in one device tick; a sender bypassing the host does.
+  model.max_force_rate_n_per_s = 2 * d.limits.max_force_rate_n_per_s;
+  model.max_torque_rate_nm_per_s = 2 * d.limits.max_torque_rate_nm_per_s;
   model.handle_damping_n_s_per_m = d.limits.device_damping_n_s_per_m;
 
   config::Pose start;
@@ -268,6 +272,7 @@ int run(const Options& o) {
   bool bus_off_reported = false, bus_restarted = false;
   double next_heartbeat_s = 0, next_fault_s = 0;
   bool stopped_answering_logged = false;
+  std::uint64_t frames_bad_seen = 0;  // invalid host frames already handed to the firmware
 
   // false: the message never leaves the device (silent, bus-off, delay queue full, link refused).
   auto transmit = [&](hf_message m, double t) {
@@ -306,7 +311,10 @@ int run(const Options& o) {
     bool info_requested = false;
     if (answering && !in_bus_off) {
       hf_message m;
-      while (link->receive(m) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
+      int budget = device::kDrainUnitBudget;  // a flood from the bus cannot stall the firmware's tick
+      while (link->receive(m, budget) == device::Io::ok) info_requested = firmware.receive(m, t) || info_requested;
+      firmware.reject_frames(static_cast<std::uint32_t>(link->frames_bad() - frames_bad_seen), t);
+      frames_bad_seen = link->frames_bad();
     }
     const std::uint64_t received_ns = now_ns();  // after the drain: no command counts as taken before it left the host
     // 2. bus-off injection: error frames exactly as a CAN controller reports them

@@ -16,7 +16,18 @@ std::uint64_t monotonic_ns() {
 
 namespace {
 constexpr std::uint64_t kHeartbeatPeriodNs = 100'000'000;  // protocol.md: heartbeats every 100 ms
+
+// A faulted STATE whose fault bits have not arrived (classic CAN carries them only in FAULT
+// messages, which may be lost or still queued): the fault holds from this very state. The status
+// names the watchdog and the e-stop; any other cause is "internal" until its FAULT message says
+// which, so it stays latched rather than being cleared as a watchdog trip.
+std::uint32_t faults_from_status(std::uint8_t status) {
+  std::uint32_t faults = 0;
+  if (status & HF_STATUS_WATCHDOG_TRIPPED) faults |= HF_FAULT_COMMAND_WATCHDOG;
+  if (status & HF_STATUS_ESTOP_LATCHED) faults |= HF_FAULT_ESTOP;
+  return faults ? faults : HF_FAULT_INTERNAL;
 }
+}  // namespace
 
 HapticArm::HapticArm(std::string name, std::unique_ptr<MessageLink> link, int handshake_ms)
     : name_(std::move(name)), link_(std::move(link)) {
@@ -37,15 +48,53 @@ HapticArm::HapticArm(std::string name, std::unique_ptr<MessageLink> link, int ha
   }
 }
 
+bool HapticArm::accept_state_sequence(std::uint16_t seq) {
+  const std::uint32_t modulus = link_->sequence_modulus();
+  if (hf_seq_accept(&state_seq_, seq, modulus)) {
+    older_run_ = 0;
+    return true;
+  }
+  // A late or repeated state is one of a kind; states that keep coming "older" and counting up
+  // one by one are a device that rebooted and began its counter again. Dropping them until the
+  // counter caught up would hold the device at a link fault for up to half a modulus (32 s).
+  older_run_ = older_run_ > 0 && seq == (older_last_ + 1) % modulus ? older_run_ + 1 : 1;
+  older_last_ = seq;
+  if (older_run_ < kRestartRun) return false;
+  older_run_ = 0;
+  state_seq_.started = 0;  // the new counter is the reference (gaps counted so far are kept)
+  hf_seq_accept(&state_seq_, seq, modulus);
+  health_.device_restarts++;
+  last_echo_ours_ = false;  // its echo starts again too
+  return true;
+}
+
+void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks) {
+  // The echo names the newest command the device applied (low 8 bits). When it moves on by more
+  // than the device ticks since the last state we got (states lost on the way are ticks too), the
+  // commands between never reached the motors: lost on the link, or superseded in one device
+  // tick. Only echoes of our own recent commands count (a device still echoing a previous host's,
+  // or one just restarted, says nothing about ours).
+  constexpr unsigned kRecent = 64;
+  const auto newest = static_cast<std::uint8_t>(command_seq_ - 1);
+  const bool ours = health_.commands_sent > 0 && static_cast<std::uint8_t>(newest - echo) < kRecent;
+  const auto advance = static_cast<std::uint8_t>(echo - last_echo_);
+  if (ours && last_echo_ours_ && advance > device_ticks && advance < kRecent)
+    health_.commands_lost += advance - device_ticks;
+  last_echo_ = echo;
+  last_echo_ours_ = ours;
+}
+
 void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated) {
   switch (m.type) {
     case HF_MSG_STATE: {
-      if (!hf_seq_accept(&state_seq_, m.seq, link_->sequence_modulus())) return;  // late or repeated
+      const std::uint32_t gaps_before = state_seq_.gaps;
+      if (!accept_state_sequence(m.seq)) return;  // late or repeated
       const hf_state& s = m.body.state;
       latest_.host_receive_ns = now_ns;
       latest_.device_time_us = s.device_time_us;
       latest_.sequence = m.seq;
       latest_.command_echo = s.command_echo;
+      count_lost_commands(s.command_echo, state_seq_.gaps - gaps_before + 1);
       for (int i = 0; i < 3; ++i) {
         latest_.position_m[i] = s.position_m[i];
         latest_.linear_velocity_m_s[i] = s.linear_velocity_m_s[i];
@@ -57,6 +106,7 @@ void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated)
       // classic CAN has no fault byte in STATE: the FAULT messages keep faults_ current
       if (link_->framing() != Framing::can) faults_ = s.fault;
       if (!(s.status & HF_STATUS_FAULTED)) faults_ = 0;
+      else if (!faults_) faults_ = faults_from_status(s.status);
       latest_.fault = faults_;
       health_.frames_ok++;
       health_.last_valid_ns = now_ns;
@@ -78,8 +128,14 @@ void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated)
       has_info_ = true;
       health_.frames_ok++;
       return;
+    case HF_MSG_COMMAND:
+      // Our own frames never come back to us (SocketCAN without CAN_RAW_RECV_OWN_MSGS, the
+      // loopback bus), so a command for our device that we hear was sent by someone else: another
+      // process on this machine or another node on the bus, bypassing our safety layer.
+      health_.foreign_commands++;
+      return;
     default:
-      return;  // host->device messages relayed on a shared bus: not ours to handle
+      return;  // other host->device messages relayed on a shared bus: not ours to handle
   }
 }
 
@@ -91,13 +147,17 @@ bool HapticArm::poll(DeviceState& out) {
     // dropping up to half a modulus of states as "older" (gaps counted so far are kept).
     reconnects_seen_ = r;
     state_seq_.started = 0;
+    older_run_ = 0;
+    last_echo_ours_ = false;
   }
   hf_message m;
   std::uint64_t now = 0;
-  while (link_->receive(m) == Io::ok) {
+  int budget = kDrainUnitBudget;
+  while (link_->receive(m, budget) == Io::ok) {
     if (!now) now = monotonic_ns();  // one clock read per poll: all frames of a tick arrived together
     handle(m, now, updated);
   }
+  if (budget == 0) health_.drains_cut_short++;
   if (updated) out = latest_;
   return updated;
 }

@@ -107,8 +107,9 @@ int MessageLink::decode(const WireFrame& frame, hf_message& out) {
   return HF_ERR_TYPE;
 }
 
-Io MessageLink::receive(hf_message& out) {
-  for (;;) {
+Io MessageLink::receive(hf_message& out, int& unit_budget) {
+  while (unit_budget > 0) {
+    --unit_budget;
     WireFrame frame;
     Io io = transport_->receive(frame);
     if (io != Io::ok) return io;
@@ -118,6 +119,7 @@ Io MessageLink::receive(hf_message& out) {
     ++frames_bad_;
     last_bad_result_ = r;
   }
+  return Io::empty;
 }
 
 }  // namespace hapfluid::device

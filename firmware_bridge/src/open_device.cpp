@@ -6,6 +6,7 @@
 
 #include "hapfluid/device/haptic_arm.hpp"
 #include "hapfluid/device/loopback.hpp"
+#include "hapfluid/device/rig_fit.hpp"
 #include "hapfluid/device/socketcan.hpp"
 #include "hapfluid/device/spacemouse.hpp"
 #include "hapfluid/device/usb_transports.hpp"
@@ -73,14 +74,18 @@ std::unique_ptr<MessageLink> open_link(const config::Transport& t, Side side) {
                                        static_cast<std::uint8_t>(t.can_node_id), side);
 }
 
-std::unique_ptr<Device> open_device(const config::RigDevice& d) {
+std::unique_ptr<Device> open_device(const config::RigDevice& d, RigFitCheck check) {
   try {
     if (d.kind == config::DeviceKind::spacemouse) {
       if (framing_of(d.transport) != Framing::hid)
         throw TransportError("a SpaceMouse speaks USB HID: use transport.kind = \"hid\" (or loopback with framing = \"hid\")");
       return std::make_unique<SpaceMouse>(d.name, open_transport(d.transport, Framing::hid, Side::host));
     }
-    return std::make_unique<HapticArm>(d.name, open_link(d.transport, Side::host));
+    auto arm = std::make_unique<HapticArm>(d.name, open_link(d.transport, Side::host));
+    // A device that answered must fit the rig; one not there yet is checked by nobody (README).
+    if (check == RigFitCheck::enforce && arm->has_info())
+      if (std::string misfit = rig_beyond_device(d, arm->info()); !misfit.empty()) throw TransportError(misfit);
+    return arm;
   } catch (const TransportError& e) {
     throw TransportError("device '" + d.name + "' (" + config::to_string(d.transport.kind) + " " +
                          d.transport.address + "): " + e.what());

@@ -86,6 +86,11 @@ CanSocket* open_socket(const std::string& interface, bool can_fd, unsigned node,
   filter.can_mask = CAN_EFF_FLAG | CAN_RTR_FLAG | (node ? 0x60Fu : 0u);
   if (::setsockopt(s->fd, SOL_CAN_RAW, CAN_RAW_FILTER, &filter, sizeof filter) != 0)
     return refuse(s, attempt, OpenFailure::permanent, "SocketCAN: setting the receive filter failed: " + errno_text(errno));
+  // Our own frames must not come back (the kernel's default, set here because the driver relies
+  // on it): every COMMAND this socket hears for our node is then someone else's.
+  int off = 0;
+  if (::setsockopt(s->fd, SOL_CAN_RAW, CAN_RAW_RECV_OWN_MSGS, &off, sizeof off) != 0)
+    return refuse(s, attempt, OpenFailure::permanent, "SocketCAN: disabling own-frame reception failed: " + errno_text(errno));
   can_err_mask_t errors = CAN_ERR_BUSOFF | CAN_ERR_CRTL | CAN_ERR_RESTARTED | CAN_ERR_PROT | CAN_ERR_ACK |
                           CAN_ERR_BUSERROR;
   if (::setsockopt(s->fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &errors, sizeof errors) != 0)

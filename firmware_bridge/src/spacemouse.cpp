@@ -69,7 +69,7 @@ bool SpaceMouse::poll(DeviceState& out) {
   const std::uint64_t now = monotonic_ns();
   bool got = false;
   WireFrame report;
-  while (transport_->receive(report) == Io::ok) {
+  for (int budget = kDrainUnitBudget; budget > 0 && transport_->receive(report) == Io::ok; --budget) {
     if (apply_report(report)) {
       health_.frames_ok++;
       health_.last_valid_ns = now;

@@ -41,12 +41,19 @@ VALID = [
     ("command_zero_disabled", 3, command(0, [0, 0, 0], [0, 0, 0], 0)),
     ("command_enabled_wrench", 3, command(4242, [1.5, -2.25, 9.999], [0.1, -0.0501, 0.3333], 1)),
     ("command_full_scale_estop_clear", 7, command(65535, [32.767, -32.767, 0], [3.2767, -3.2767, 0], 6)),
+    # a limited wrench half a step below a whole mN or 0.1 mN.m: rounded toward zero, never past it
+    ("command_half_lsb_never_rounds_past_the_value", 3,
+     command(5, [9.9995, -9.9995, 0.0015], [0.49995, -0.49995, 0.00015], 1)),
     ("host_heartbeat", 3, {"type": "HOST_HEARTBEAT", "seq": 12, "fields": {"uptime_ms": 1000, "status": 0}}),
     ("device_heartbeat", 3, {"type": "DEVICE_HEARTBEAT", "seq": 300, "fields": {"uptime_ms": 86400000, "status": 3}}),
     ("info_request", 3, {"type": "INFO_REQUEST", "seq": 1, "fields": {}}),
     ("info", 3, {"type": "INFO", "seq": 1, "fields": {
         "vendor_id": 0x1209, "product_id": 0x4846, "firmware_version": 0x0102, "protocol_version": 1,
         "watchdog_ms": 20, "max_force_n": 12.5, "max_torque_nm": 0.75, "workspace_half_extent_m": 0.3}}),
+    # a device's limits are reported at or below what they are, never above
+    ("info_limits_never_round_up", 3, {"type": "INFO", "seq": 2, "fields": {
+        "vendor_id": 0x1209, "product_id": 0x4846, "firmware_version": 0x0102, "protocol_version": 1,
+        "watchdog_ms": 20, "max_force_n": 9.996, "max_torque_nm": 0.4996, "workspace_half_extent_m": 0.2996}}),
     ("fault_watchdog", 3, {"type": "FAULT", "seq": 17, "fields": {"faults": 1, "cause": 0, "detail": 21}}),
     ("fault_estop_and_workspace", 9, {"type": "FAULT", "seq": 18, "fields": {"faults": 0x0A, "cause": 3, "detail": 0}}),
     ("estop_operator", 3, {"type": "ESTOP", "seq": 2, "fields": {"reason": 0}}),

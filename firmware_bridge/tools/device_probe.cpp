@@ -37,6 +37,7 @@ const char* kUsage = R"(usage: haptic-device-probe [options]
 
 struct Options {
   config::RigDevice device;
+  bool from_rig = false;  // the device's INFO is checked against a rig only when one was given
   double duration_s = 2, silent_after_s = -1, clear_faults_at_s = -1, estop_at_s = -1;
   double force[3] = {0, 0, 0}, torque[3] = {0, 0, 0};
   bool enable = false;
@@ -84,6 +85,7 @@ Options parse(int argc, char** argv) {
     const config::RigDevice* d = rig.find_device(rig_device);
     if (!d) throw std::invalid_argument(rig_file + ": no device named '" + rig_device + "'");
     o.device = *d;
+    o.from_rig = true;
   }
   if (o.device.transport.address.empty()) throw std::invalid_argument("--address (or --rig/--device) is required");
   return o;
@@ -96,7 +98,7 @@ double percentile(std::vector<double> v, double p) {
 }
 
 int run(const Options& o) {
-  auto dev = device::open_device(o.device);
+  auto dev = device::open_device(o.device, o.from_rig ? device::RigFitCheck::enforce : device::RigFitCheck::skip);
   if (!dev->health().connected) std::fprintf(stderr, "haptic-device-probe: %s\n", device::silent_device_hint(o.device, dev->health()).c_str());
   auto* arm = dynamic_cast<device::HapticArm*>(dev.get());
   const std::size_t max_ticks = static_cast<std::size_t>(o.duration_s * 1000) + 16;

@@ -91,6 +91,20 @@ def _quantise(value: float, scale: float, limit: int, what: str) -> int:
     return q
 
 
+def _quantise_within(value: float, scale: float, limit: int, what: str) -> int:
+    """As _quantise, then one LSB back toward zero when rounding went past the value (codec.c)."""
+    q = _quantise(value, scale, limit, what)
+    if q > 0 and q / scale > value:
+        q -= 1
+    elif q < 0 and q / scale < value:
+        q += 1
+    return q
+
+
+def _i16_within(value: float, scale: float, what: str) -> bytes:
+    return struct.pack("<h", _quantise_within(value, scale, 32767, what))
+
+
 def _i16(value: float, scale: float, what: str) -> bytes:
     return struct.pack("<h", _quantise(value, scale, 32767, what))
 
@@ -105,7 +119,7 @@ def _get_i16(data: bytes, offset: int, scale: float, what: str) -> float:
 def _u16(value: float, scale: float, what: str) -> bytes:
     if not value >= 0:
         raise WireError("RANGE", f"{what} = {value} must be >= 0")
-    return struct.pack("<H", _quantise(value, scale, 65535, what))
+    return struct.pack("<H", _quantise_within(value, scale, 65535, what))
 
 
 def _put_quaternion(q_in) -> tuple[bytes, int]:
@@ -164,8 +178,8 @@ def write_payload(type_id: int, f: dict) -> bytes:
     if type_id == 2:
         flags = f.get("flags", 0)
         _check(flags & 0xF8, "RESERVED", "command flags")
-        out = b"".join(_i16(v, SCALE_FORCE, "force_n") for v in f["force_n"])
-        out += b"".join(_i16(v, SCALE_TORQUE, "torque_nm") for v in f["torque_nm"])
+        out = b"".join(_i16_within(v, SCALE_FORCE, "force_n") for v in f["force_n"])
+        out += b"".join(_i16_within(v, SCALE_TORQUE, "torque_nm") for v in f["torque_nm"])
         return out + bytes([flags, 0])
     if type_id in (3, 4):
         _check(f.get("status", 0) & 0xC0, "RESERVED", "heartbeat status")

@@ -55,6 +55,24 @@ TEST(Rig, NonPositiveLimitNamesFileLineKeyValueAndReason) {
   EXPECT_EQ(problems_of(text), "rig.toml:5: devices.left.max_force_n = -3: must be > 0");
 }
 
+TEST(Rig, LimitsBeyondTheWiresFullScaleAreRejected) {
+  // The COMMAND carries +-32.767 N and +-3.2767 N*m per axis: a rig promising 40 N could never
+  // send it (the encoder refuses, and a disabled zero wrench goes instead). INFO carries 1..255 ms.
+  EXPECT_EQ(problems_of(std::string(kMinimalDevice) + "max_force_n = 40\n"),
+            "rig.toml:5: devices.left.max_force_n = 40: must be <= 32.767 N, the full scale of the wire "
+            "(firmware_bridge/protocol.md 1.2)");
+  EXPECT_EQ(problems_of(std::string(kMinimalDevice) + "max_torque_nm = 3.3\n"),
+            "rig.toml:5: devices.left.max_torque_nm = 3.3: must be <= 3.2767 N*m, the full scale of the wire "
+            "(firmware_bridge/protocol.md 1.2)");
+  EXPECT_NE(problems_of(std::string(kMinimalDevice) + "max_force_axis_n = [10, 33, 10]\n")
+                .find("devices.left.max_force_axis_n = [10, 33, 10]: every component must be <= 32.767 N"),
+            std::string::npos);
+  EXPECT_NE(problems_of(std::string(kMinimalDevice) + "device_watchdog_ms = 300\n")
+                .find("devices.left.device_watchdog_ms = 300: must be <= 255 ms"),
+            std::string::npos);
+  EXPECT_EQ(problems_of(std::string(kMinimalDevice) + "max_force_n = 32.767\nmax_torque_nm = 3.2767\n"), "");
+}
+
 TEST(Rig, UnknownKeyIsReportedAsATypo) {
   std::string text = std::string(kMinimalDevice) + "max_forse_n = 3.0\n";
   EXPECT_EQ(problems_of(text), "rig.toml:5: devices.left.max_forse_n = 3.0: unknown key");

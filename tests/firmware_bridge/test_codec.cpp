@@ -1,5 +1,5 @@
 // Codec properties beyond the shared vectors: round trips keep every value within half a
-// quantisation step, encoding refuses what it cannot represent (never clips: a clipped force would
+// quantisation step (a bounded one, the wrench, within one step and never past it), encoding refuses what it cannot represent (never clips: a clipped force would
 // hide a safety-layer bug), decoders reject damaged frames, and sequence gaps are counted.
 #include <gtest/gtest.h>
 
@@ -75,6 +75,60 @@ TEST(WireCodec, StateRoundTripIsWithinHalfAStepOnEveryFraming) {
                 k == 3 ? HF_OK : HF_ERR_INCOMPLETE);
     EXPECT_EQ(std::memcmp(classic.body.state.position_m, got.body.state.position_m, sizeof(double) * 3), 0);
   }
+}
+
+// The safety layer limits the wrench; the wire must not add to it. Rounding to the nearest mN
+// could carry a force limited to 9.9995 N to 10.000 N, past the limit the layer enforced (and
+// past the device's own norm limit, which would then saturate). So every component decodes at
+// most as large as it was, and within one step of it.
+TEST(WireCodec, CommandWrenchNeverDecodesLargerThanItWasEncoded) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> force(-32.7, 32.7), torque(-3.27, 3.27);
+  for (int trial = 0; trial < 20000; ++trial) {
+    hf_message m;
+    std::memset(&m, 0, sizeof m);
+    m.type = HF_MSG_COMMAND;
+    for (int i = 0; i < 3; ++i) {
+      m.body.command.force_n[i] = force(rng);
+      m.body.command.torque_nm[i] = torque(rng);
+    }
+    if (trial < 3) {  // exact half steps, where rounding away from zero would go past
+      m.body.command.force_n[trial] = 9.9995;
+      m.body.command.torque_nm[trial] = -0.49995;
+    }
+    uint8_t packet[64];
+    ASSERT_EQ(hf_encode_packet(&m, packet, sizeof packet), 20);
+    hf_message got;
+    ASSERT_EQ(hf_decode_packet(packet, 20, &got), HF_OK);
+    for (int i = 0; i < 3; ++i) {
+      const double f = m.body.command.force_n[i], g = got.body.command.force_n[i];
+      EXPECT_LE(std::fabs(g), std::fabs(f)) << "force " << f << " N decoded as " << g << " N";
+      EXPECT_LT(std::fabs(g - f), 1e-3) << "more than one 1 mN step off";
+      const double t = m.body.command.torque_nm[i], u = got.body.command.torque_nm[i];
+      EXPECT_LE(std::fabs(u), std::fabs(t)) << "torque " << t << " N*m decoded as " << u << " N*m";
+      EXPECT_LT(std::fabs(u - t), 1e-4) << "more than one 0.1 mN*m step off";
+    }
+  }
+}
+
+// The host checks its rig limits against the device's INFO: a limit reported above the real
+// one (9.996 N sent as 10.00 N) would let a rig ask for force the motors do not have.
+TEST(WireCodec, InfoLimitsNeverDecodeAboveTheDevicesOwn) {
+  hf_message m;
+  std::memset(&m, 0, sizeof m);
+  m.type = HF_MSG_INFO;
+  m.body.info.protocol_version = 1;
+  m.body.info.watchdog_ms = 20;
+  m.body.info.max_force_n = 9.996;
+  m.body.info.max_torque_nm = 0.4996;
+  m.body.info.workspace_half_extent_m = 0.2996;
+  uint8_t packet[64];
+  ASSERT_EQ(hf_encode_packet(&m, packet, sizeof packet), 20);
+  hf_message got;
+  ASSERT_EQ(hf_decode_packet(packet, 20, &got), HF_OK);
+  EXPECT_DOUBLE_EQ(got.body.info.max_force_n, 9.99);
+  EXPECT_DOUBLE_EQ(got.body.info.max_torque_nm, 0.499);
+  EXPECT_DOUBLE_EQ(got.body.info.workspace_half_extent_m, 0.299);
 }
 
 TEST(WireCodec, EncoderRefusesWhatItCannotRepresentAndWritesNothing) {

@@ -2,6 +2,7 @@
 // rules a real arm must follow so a crashed host can never leave force on a hand.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -26,8 +27,16 @@ hf_message command(std::uint16_t seq, double fx, std::uint8_t flags) {
 
 hapfluid::config::PoseTwist still_hand() { return {}; }
 
-TEST(FakeFirmware, WatchdogCutsTheMotorsOnTheFirstTickThatCompletesItsSilenceLimit) {
+// The rules other than the rate limit, each seen in one tick: a model whose motors follow a step.
+DeviceModel without_rate_limit() {
   DeviceModel model;
+  model.max_force_rate_n_per_s = 1e9;
+  model.max_torque_rate_nm_per_s = 1e9;
+  return model;
+}
+
+TEST(FakeFirmware, WatchdogCutsTheMotorsOnTheFirstTickThatCompletesItsSilenceLimit) {
+  DeviceModel model = without_rate_limit();
   model.watchdog_ms = 20;
   FakeFirmware fw(model, {});
   double t = 0;
@@ -92,7 +101,7 @@ TEST(FakeFirmware, EmergencyStopLatchesFromEitherTheMessageOrTheCommandFlag) {
 }
 
 TEST(FakeFirmware, MotorForceIsLimitedInNormWithItsDirectionKept) {
-  DeviceModel model;
+  DeviceModel model = without_rate_limit();
   model.max_force_n = 5.0;
   FakeFirmware fw(model, {});
   hf_message m = command(0, 6.0, HF_CMD_ENABLE);
@@ -102,6 +111,29 @@ TEST(FakeFirmware, MotorForceIsLimitedInNormWithItsDirectionKept) {
   EXPECT_NEAR(fw.record().applied_force_n[0], 3.0, 1e-12);
   EXPECT_NEAR(fw.record().applied_force_n[1], 4.0, 1e-12);
   EXPECT_TRUE(fw.status() & HF_STATUS_FORCE_SATURATED);
+}
+
+TEST(FakeFirmware, MotorForceRisesNoFasterThanTheDevicesOwnRateLimitButDropsToZeroAtOnce) {
+  // A command stepping 0 -> 10 N (a sender that bypassed the host's safety layer, which never
+  // steps like this) reaches the hand at 2000 N/s: 2 N per 1 ms tick, 10 N after 5 ticks. Motors
+  // off is the safe step and is taken at once.
+  DeviceModel model;
+  model.max_force_rate_n_per_s = 2000.0;
+  FakeFirmware fw(model, {});
+  double t = 0;
+  std::uint16_t seq = 0;
+  for (int tick = 1; tick <= 6; ++tick, t += kTick) {
+    fw.receive(command(seq++, 10.0, HF_CMD_ENABLE), t);
+    fw.step(t, kTick, still_hand());
+    EXPECT_NEAR(fw.record().applied_force_n[0], std::min(10.0, 2.0 * tick), 1e-9) << "tick " << tick;
+  }
+  fw.receive(command(seq++, -10.0, HF_CMD_ENABLE), t);  // reversing is a 20 N change: 2 N per tick too
+  fw.step(t, kTick, still_hand());
+  t += kTick;
+  EXPECT_NEAR(fw.record().applied_force_n[0], 8.0, 1e-9);
+  fw.receive(command(seq++, -10.0, 0), t);  // disabled
+  fw.step(t, kTick, still_hand());
+  EXPECT_EQ(fw.record().applied_force_n[0], 0.0) << "motors off at once, not ramped";
 }
 
 TEST(FakeFirmware, AConstantForceDisplacesTheHeldHandleByForceOverHandStiffness) {

@@ -43,12 +43,15 @@ struct Rig {
                                                     device_link->sequence_modulus());
   }
   // One 1 ms tick of the device: receive, step, send a state (unless told to drop it).
-  void device_tick(bool send_state = true, bool corrupt = false) {
+  void device_tick(bool send_state = true, bool corrupt = false, bool send_fault = true) {
     hf_message m;
     firmware->begin_tick();
-    while (device_link->receive(m) == device::Io::ok) firmware->receive(m, t);
+    for (int budget = device::kDrainUnitBudget; device_link->receive(m, budget) == device::Io::ok;)
+      firmware->receive(m, t);
+    firmware->reject_frames(static_cast<std::uint32_t>(device_link->frames_bad() - frames_bad_seen), t);
+    frames_bad_seen = device_link->frames_bad();
     firmware->step(t, 1e-3, config::PoseTwist{});
-    if (firmware->take_new_fault()) {
+    if (firmware->take_new_fault() && send_fault) {
       std::memset(&m, 0, sizeof m);
       m.type = HF_MSG_FAULT;
       m.body.fault = firmware->fault_report(t);
@@ -68,6 +71,7 @@ struct Rig {
   std::unique_ptr<fake::FakeFirmware> firmware;
   double t = 0;
   std::uint16_t state_seq = 0;
+  std::uint64_t frames_bad_seen = 0;
 };
 
 class EveryFraming : public ::testing::TestWithParam<Framing> {};
@@ -112,6 +116,8 @@ TEST_P(EveryFraming, CorruptedAndDroppedStatesAreCountedNotUsed) {
   // a corrupted state and a dropped one both leave holes in the sequence; the first corrupt
   // state precedes the first valid one, so it is not a gap
   EXPECT_EQ(h.sequence_gaps, 19u);
+  // every command was applied: an echo that moved on by two across a missing state is no loss
+  EXPECT_EQ(h.commands_lost, 0u);
 }
 
 TEST_P(EveryFraming, TheWatchdogFaultReachesTheHost) {
@@ -136,6 +142,154 @@ TEST_P(EveryFraming, TheWatchdogFaultReachesTheHost) {
   EXPECT_EQ(ticks_until_seen, 19);
   EXPECT_TRUE(state.status & HF_STATUS_WATCHDOG_TRIPPED);
   EXPECT_EQ(rig.firmware->record().applied_force_n[1], 0.0);
+}
+
+TEST_P(EveryFraming, AFrameFloodCannotHoldThePollingThread) {
+  // Anyone on the bus (or a broken gateway) can send frames faster than the loop drains them. A
+  // poll reads at most kDrainUnitBudget units and returns, so the 1 kHz tick keeps its budget; the
+  // state behind the flood arrives a few polls later, each of which returned on its own.
+  Rig rig(GetParam(), "flood");
+  device::WireFrame junk;
+  switch (GetParam()) {
+    case Framing::can: junk.can_id = 0x054; junk.length = 8; break;  // STATE_POS of node 4, not ours
+    case Framing::canfd: junk.can_id = 0x154; junk.fd = true; junk.length = 48; break;
+    case Framing::hid: junk.data[0] = 1; junk.length = 64; break;  // protocol version 0: rejected
+    case Framing::bulk: junk.length = 38; break;
+  }
+  int flooded = 0;
+  for (int i = 0; i < 3 * device::kDrainUnitBudget; ++i)
+    flooded += rig.device_link->transport().send(junk) == device::Io::ok ? 1 : 0;
+  ASSERT_GT(flooded, device::kDrainUnitBudget) << "the bus took too few frames to flood a poll";
+  rig.device_tick();  // one valid state, behind the flood
+  device::DeviceState state;
+  EXPECT_FALSE(rig.arm->poll(state)) << "one poll drained the whole flood";
+  EXPECT_EQ(rig.arm->health().drains_cut_short, 1u);
+  int polls = 1;
+  while (!rig.arm->poll(state) && polls < 10) ++polls;
+  EXPECT_LT(polls, 10) << "the state behind the flood never arrived";
+}
+
+TEST_P(EveryFraming, CommandsTheDeviceNeverAppliedAreCountedFromItsEcho) {
+  // Every 4th command is lost on the way (discarded before the firmware sees it): the echo of the
+  // next state skips it, and the driver counts it. 25 lost in 100 ticks; the last, on tick 99,
+  // shows only when a later command is applied.
+  Rig rig(GetParam(), "lostcmd");
+  device::DeviceState state;
+  for (int tick = 0; tick < 100; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    if (tick % 4 == 3) {
+      hf_message m;
+      for (int budget = device::kDrainUnitBudget; rig.device_link->receive(m, budget) == device::Io::ok;) {
+      }
+    }
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_EQ(rig.arm->health().commands_lost, 24u);
+}
+
+TEST_P(EveryFraming, AFaultedStatusHoldsAtOnceEvenWhenItsFaultMessageIsLost) {
+  // Classic CAN carries the fault bits only in FAULT messages; the STATE's status bit 1 says
+  // "faulted" in every frame set. When the FAULT message is lost (or still queued), the host
+  // must not render force into a faulted device: the fault holds from that very state, as the
+  // watchdog trip its status names.
+  Rig rig(GetParam(), "faulted");
+  device::DeviceState state;
+  device::DeviceCommand c;
+  c.force_n[1] = 2.0;
+  c.enable = true;
+  for (int tick = 0; tick < 50; ++tick) {
+    rig.arm->send(c);
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  for (int tick = 0; tick < 30 && !(state.status & HF_STATUS_FAULTED); ++tick) {  // host silent
+    rig.device_tick(true, false, /*send_fault=*/false);
+    rig.arm->poll(state);
+  }
+  ASSERT_TRUE(state.status & HF_STATUS_FAULTED) << "the firmware's watchdog did not trip";
+  EXPECT_EQ(state.fault, std::uint32_t(HF_FAULT_COMMAND_WATCHDOG))
+      << "a faulted state without its FAULT message must carry a fault";
+}
+
+TEST_P(EveryFraming, ADeviceThatRebootsMidRunIsTakenUpWithinAFewStates) {
+  // A device that reboots starts its STATE counter again at 0. Far "behind" the last number seen,
+  // its states would look old and be dropped until the counter caught up: up to 32 s of a live
+  // device held at a link fault. Three states counting up one by one are a restart; the driver
+  // takes the new counter and reports it, so the loop treats it as a link loss.
+  Rig rig(GetParam(), "reboot");
+  rig.state_seq = 30000;  // a device 30 s into its run (the low 8 bits on classic CAN)
+  device::DeviceState state;
+  for (int tick = 0; tick < 20; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  ASSERT_EQ(state.sequence, std::uint16_t(rig.state_seq - 1) % rig.device_link->sequence_modulus());
+  rig.firmware = std::make_unique<fake::FakeFirmware>(fake::DeviceModel{}, config::Pose{},
+                                                      rig.device_link->sequence_modulus());
+  rig.state_seq = 0;  // rebooted
+  int states_until_taken = 0;
+  bool taken = false;
+  while (!taken && states_until_taken < 100) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    ++states_until_taken;
+    taken = rig.arm->poll(state);
+  }
+  EXPECT_EQ(states_until_taken, 3) << "the restarted device's states were dropped as old";
+  EXPECT_EQ(state.sequence, 2u);
+  EXPECT_EQ(rig.arm->health().device_restarts, 1u);
+  rig.device_tick();
+  EXPECT_TRUE(rig.arm->poll(state)) << "and its stream goes on";
+  EXPECT_EQ(rig.arm->health().device_restarts, 1u);
+}
+
+TEST_P(EveryFraming, ALateOrRepeatedStateIsDroppedNotTakenForARestart) {
+  // One old state among new ones (a gateway's retransmission, a reordered frame) is dropped.
+  Rig rig(GetParam(), "late");
+  device::DeviceState state;
+  for (int tick = 0; tick < 10; ++tick) {
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  for (int repeat = 0; repeat < 5; ++repeat) {
+    rig.state_seq = 3;  // the same old state again and again is no counter counting up
+    rig.device_tick();
+    EXPECT_FALSE(rig.arm->poll(state));
+  }
+  EXPECT_EQ(rig.arm->health().device_restarts, 0u);
+}
+
+TEST_P(EveryFraming, ABurstOfBadCommandFramesLatchesTheDevicesBadCommandsFault) {
+  // Ten invalid command frames within 100 ms (a failing transceiver, a broken gateway) and the
+  // device no longer trusts the stream: motors off, HF_FAULT_BAD_COMMANDS latched and reported,
+  // as the host sees in the next state. A stray bad frame now and then is only counted.
+  Rig rig(GetParam(), "badcmd");
+  device::DeviceState state;
+  device::DeviceCommand c;
+  c.force_n[0] = 2.0;
+  c.enable = true;
+  for (int tick = 0; tick < 100; ++tick) {  // one bad command every 20 ms: 5 per 100 ms
+    if (tick % 20 == 0) rig.arm->link().corrupt_next(1);
+    rig.arm->send(c);
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  ASSERT_EQ(rig.firmware->faults(), 0u) << "stray bad frames tripped the device";
+  ASSERT_EQ(rig.firmware->record().applied_force_n[0], 2.0);
+  for (int tick = 0; tick < 10; ++tick) {  // every command of 10 ms bad
+    rig.arm->link().corrupt_next(1);
+    rig.arm->send(c);
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_TRUE(rig.firmware->faults() & HF_FAULT_BAD_COMMANDS);
+  rig.arm->send(c);
+  rig.device_tick();
+  rig.arm->poll(state);
+  EXPECT_EQ(rig.firmware->record().applied_force_n[0], 0.0) << "the motors stay off, good commands or not";
+  EXPECT_TRUE(state.fault & HF_FAULT_BAD_COMMANDS) << "the host hears the cause";
 }
 
 INSTANTIATE_TEST_SUITE_P(Loopback, EveryFraming,
@@ -170,6 +324,36 @@ TEST(LoopbackBus, RelaysHostFramesToAMonitorAndReportsBusOff) {
   bus.send(error);
   host.receive(got);
   EXPECT_FALSE(host.error_flags() & device::kBusOff) << "a restarted controller clears bus-off";
+}
+
+TEST(LoopbackBus, ACommandForOurDeviceThatWeDidNotSendIsCountedAsForeign) {
+  // Any local user can open a raw CAN socket and command our node, bypassing the host's safety
+  // layer. The host hears every frame for its node but never its own: a command it hears is
+  // someone else's, which the driver reports (the loop latches zero force on it).
+  for (Framing framing : {Framing::can, Framing::canfd}) {
+    SCOPED_TRACE(device::to_string(framing));
+    Rig rig(framing, "foreign");
+    device::DeviceState state;
+    for (int tick = 0; tick < 20; ++tick) {
+      rig.arm->send(device::DeviceCommand{});
+      rig.device_tick();
+      rig.arm->poll(state);
+    }
+    EXPECT_EQ(rig.arm->health().foreign_commands, 0u) << "our own commands are not foreign";
+    device::MessageLink intruder(
+        std::make_unique<device::LoopbackTransport>(rig.path, device::LoopbackRole::peer, device::LoopbackFormat::can),
+        framing, 3, device::Side::host);
+    hf_message m;
+    std::memset(&m, 0, sizeof m);
+    m.type = HF_MSG_COMMAND;
+    m.seq = 21;  // just ahead of ours: the device would take it
+    m.body.command.force_n[0] = 20.0;
+    m.body.command.flags = HF_CMD_ENABLE;
+    ASSERT_TRUE(intruder.send(m));
+    rig.device_tick();
+    rig.arm->poll(state);
+    EXPECT_EQ(rig.arm->health().foreign_commands, 1u);
+  }
 }
 
 TEST(LoopbackBus, APeerStartedBeforeItsBusIsDisconnectedUntilTheBusAppears) {

@@ -69,7 +69,8 @@ TEST(RealTimeRules, PollAndSendNeitherAllocateNorFree) {
     arm.send(command);
     const long mark = g_allocations.load();
     hf_message m;
-    while (device_link.receive(m) == device::Io::ok) firmware.receive(m, tick * 1e-3);
+    for (int budget = device::kDrainUnitBudget; device_link.receive(m, budget) == device::Io::ok;)
+      firmware.receive(m, tick * 1e-3);
     firmware.step(tick * 1e-3, 1e-3, config::PoseTwist{});
     std::memset(&m, 0, sizeof m);
     m.type = HF_MSG_STATE;

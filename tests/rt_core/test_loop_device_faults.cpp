@@ -17,6 +17,9 @@ namespace {
 class FaultyDevice final : public device::Device {
  public:
   std::uint32_t fault = 0;
+  std::uint32_t restarts = 0;  // health().device_restarts
+  std::uint64_t foreign = 0;   // health().foreign_commands
+  std::uint64_t lost = 0;      // health().commands_lost
   bool silent = false;
   device::DeviceCommand last{};
   bool poll(device::DeviceState& out) override {
@@ -33,6 +36,9 @@ class FaultyDevice final : public device::Device {
   device::DeviceHealth health() const override {
     device::DeviceHealth h;
     h.connected = true;
+    h.device_restarts = restarts;
+    h.foreign_commands = foreign;
+    h.commands_lost = lost;
     return h;
   }
   const char* name() const override { return "faulty"; }
@@ -92,4 +98,84 @@ TEST(LoopDeviceFaults, NoClearWithoutAFreshFrame) {
   l.device->silent = true;
   l.ticks(1);
   EXPECT_FALSE(l.device->last.clear_faults);
+}
+
+TEST(LoopDeviceFaults, ADeviceThatRebootedIsTakenUpThroughLinkRecovery) {
+  // A rebooted device forgot the command it applied and starts from its own state: however short
+  // its silence, the loop zeroes the wrench at once and gives it back only after the link was
+  // healthy for link_recover_ms (100 ms; the loop's clock is CLOCK_MONOTONIC), as after any link loss.
+  LoopWithOneDevice l;
+  auto link_invalid = [&] { return (l.loop->last_trace().devices[0].faults & safety::fault_link_invalid) != 0; };
+  l.ticks(3);
+  ASSERT_FALSE(link_invalid());
+  l.device->restarts = 1;
+  const std::uint64_t restart_ns = shm::monotonic_ns();
+  l.ticks(1);
+  EXPECT_TRUE(link_invalid()) << "the restart was not taken as a link loss";
+  EXPECT_FALSE(l.device->last.enable);
+  while (link_invalid() && shm::monotonic_ns() - restart_ns < 2'000'000'000ull) {
+    l.ticks(1);
+    if (link_invalid()) EXPECT_FALSE(l.device->last.enable);
+  }
+  EXPECT_FALSE(link_invalid()) << "never recovered";
+  EXPECT_GE(double(shm::monotonic_ns() - restart_ns) * 1e-6, 100.0) << "recovered before link_recover_ms";
+}
+
+TEST(LoopDeviceFaults, AForeignCommandLatchesTheDeviceAtZeroUntilTheOperatorResets) {
+  // The driver heard a command for our device that we did not send: the loop zeroes and disables
+  // that device at once, names the cause (foreign_command, in the trace and the flight recorder's
+  // file name) and keeps it so until the operator's reset (SIGUSR2).
+  LoopWithOneDevice l;
+  auto foreign = [&] { return (l.loop->last_trace().devices[0].faults & safety::fault_foreign_command) != 0; };
+  l.ticks(3);
+  ASSERT_FALSE(foreign());
+  l.device->foreign = 1;
+  l.ticks(1);
+  EXPECT_TRUE(foreign());
+  EXPECT_FALSE(l.device->last.enable);
+  EXPECT_EQ(l.device->last.force_n[0], 0.0);
+  l.ticks(200);
+  EXPECT_TRUE(foreign()) << "cleared without the operator";
+  l.loop->request_estop_reset();
+  l.ticks(1);
+  EXPECT_FALSE(foreign());
+}
+
+TEST(LoopDeviceFaults, CommandsTheDeviceNeverAppliedCountTowardTheCommunicationConstraint) {
+  // The driver counts the commands the device's echo skipped; the loop hands each tick's new
+  // ones to the safety layer, which latches the fault beyond 50 (rig default) until the reset.
+  LoopWithOneDevice l;
+  auto violated = [&] {
+    return (l.loop->last_trace().devices[0].faults & safety::fault_communication_constraints) != 0;
+  };
+  l.ticks(3);
+  ASSERT_FALSE(violated());
+  l.device->lost += 30;
+  l.ticks(1);
+  EXPECT_FALSE(violated());
+  l.device->lost += 30;  // 60 within 1 ms of loop ticks
+  l.ticks(1);
+  EXPECT_TRUE(violated());
+  EXPECT_FALSE(l.device->last.enable);
+  l.ticks(100);
+  EXPECT_TRUE(violated()) << "cleared without the operator";
+}
+
+TEST(LoopDeviceFaults, CountsTheDriverMadeBeforeTheLoopStartedAreNotThisRunsButForeignCommandsAre) {
+  // Commands lost or a restart seen before the loop (another program drove the device) say
+  // nothing about this run; a foreign command heard while opening the device is someone else
+  // commanding it now.
+  auto device = std::make_unique<FaultyDevice>();
+  device->lost = 1000;
+  device->restarts = 2;
+  device->foreign = 1;
+  std::vector<std::unique_ptr<device::Device>> devices;
+  devices.push_back(std::move(device));
+  rt::LoopOptions options;
+  options.publish_trace = false;
+  rt::RtLoop loop(rt_test::one_device_rig("arm", "device-faults-before"), std::move(devices), options);
+  loop.tick(1'000'000'000, 1'000'000'000);
+  const std::uint32_t faults = loop.last_trace().devices[0].faults;
+  EXPECT_EQ(faults & (safety::fault_communication_constraints | safety::fault_link_invalid), 0u);
+  EXPECT_NE(faults & safety::fault_foreign_command, 0u);
 }

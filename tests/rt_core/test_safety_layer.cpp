@@ -224,6 +224,82 @@ TEST(SafetyLayer, DeadmanReleaseZeroesImmediatelyWhenRequired) {
   EXPECT_TRUE(out.flags & flag_deadman_released);
 }
 
+TEST(SafetyLayer, AForeignCommandLatchesZeroUntilTheOperatorResets) {
+  // Someone else commanding our device (another process on the machine, another node on the
+  // bus) bypasses every rule here: whoever it is, force stays off until an operator has looked.
+  Harness h;
+  SafetyOutput out = h.settle({{0.5, 0, 0}, {}});
+  ASSERT_GT(out.wrench.force_n.x, 0.4);
+  SafetyInput in;
+  in.now_ns = (h.now_ns += kTickNs);
+  in.command = {{0.5, 0, 0}, {}};
+  in.fresh_frame = true;
+  in.sim_age_ms = 0;
+  in.deadman_pressed = true;
+  in.foreign_command = true;
+  out = h.layer.step(in);
+  EXPECT_EQ(out.wrench, Wrench{}) << "zero at once, not ramped";
+  EXPECT_FALSE(out.enable);
+  EXPECT_TRUE(out.faults & fault_foreign_command);
+  EXPECT_EQ(fault_names(out.faults & fault_foreign_command), "foreign_command") << "the cause is named";
+  for (int i = 0; i < 1000; ++i) out = h.tick({{0.5, 0, 0}, {}});  // 1 s of healthy, quiet link
+  EXPECT_TRUE(out.faults & fault_foreign_command) << "latched: it does not clear by itself";
+  EXPECT_EQ(out.wrench, Wrench{});
+  EXPECT_TRUE(h.layer.reset_estop());
+  for (int i = 0; i < 300; ++i) out = h.tick({{0.5, 0, 0}, {}});
+  EXPECT_FALSE(out.faults & fault_foreign_command);
+  EXPECT_NEAR(out.wrench.force_n.x, 0.5, 1e-9) << "force returns through the engage gate";
+}
+
+namespace {
+// One healthy tick whose command stream lost `lost` commands since the last one.
+SafetyOutput tick_losing(Harness& h, std::uint32_t lost) {
+  SafetyInput in;
+  in.now_ns = (h.now_ns += kTickNs);
+  in.command = {{0.5, 0, 0}, {}};
+  in.fresh_frame = true;
+  in.sim_age_ms = 0;
+  in.deadman_pressed = true;
+  in.commands_lost = lost;
+  return h.layer.step(in);
+}
+}  // namespace
+
+TEST(SafetyLayer, LosingCommandsInBulkLatchesTheCommunicationConstraintUntilTheOperatorResets) {
+  // libfranka's communication_constraints_violation: a link that loses most commands renders a
+  // wrench the hand never gets. Rig defaults: more than 50 lost, draining 50 per 100 ms.
+  Harness h;
+  SafetyOutput out = h.settle({{0.5, 0, 0}, {}});
+  ASSERT_GT(out.wrench.force_n.x, 0.4);
+  // losing 3 commands of every 4 (0.75 per ms against a drain of 0.5 per ms)
+  int ticks = 0;
+  for (; ticks < 1000 && !(out.faults & fault_communication_constraints); ++ticks)
+    out = tick_losing(h, ticks % 4 != 0 ? 1 : 0);
+  // the bucket fills at 0.75 - 0.5 = 0.25 per ms: 50 / 0.25 = 200 ms, to within one 4-tick period
+  EXPECT_NEAR(ticks, 200, 4);
+  EXPECT_EQ(out.wrench, Wrench{});
+  EXPECT_FALSE(out.enable);
+  EXPECT_EQ(fault_names(out.faults & fault_communication_constraints), "communication_constraints_violation");
+  for (int i = 0; i < 1000; ++i) out = tick_losing(h, 0);
+  EXPECT_TRUE(out.faults & fault_communication_constraints) << "latched: it does not clear by itself";
+  EXPECT_TRUE(h.layer.reset_estop()) << "the explicit recovery";
+  for (int i = 0; i < 300; ++i) out = tick_losing(h, 0);
+  EXPECT_FALSE(out.faults & fault_communication_constraints);
+  EXPECT_NEAR(out.wrench.force_n.x, 0.5, 1e-9);
+}
+
+TEST(SafetyLayer, LosingCommandsNowAndThenOrInOneStallIsNoViolation) {
+  // A device tick that takes two commands loses one; a 40 ms device stall supersedes 40 at once;
+  // half the commands lost for a second is still within the constraint. None of these fault.
+  Harness h;
+  SafetyOutput out = h.settle({{0.5, 0, 0}, {}});
+  out = tick_losing(h, 40);
+  for (int i = 0; i < 1000; ++i) out = tick_losing(h, i % 2);
+  EXPECT_FALSE(out.faults & fault_communication_constraints);
+  out = tick_losing(h, 51);
+  EXPECT_TRUE(out.faults & fault_communication_constraints) << "but 51 at once are more than 50";
+}
+
 TEST(SafetyLayer, EstopLatchesUntilAnExplicitResetWithTheButtonReleased) {
   Harness h;
   SafetyOutput out = h.settle({{0.5, 0, 0}, {}});

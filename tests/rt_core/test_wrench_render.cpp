@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "hapfluid/rt/wrench_render.hpp"
+#include "hapfluid/safety/flags.hpp"
 
 using namespace hapfluid;
 using namespace hapfluid::rt;
@@ -93,7 +94,7 @@ shm::CouplingModel model_at_origin(double k, double d) {
   m.angular_damping_nm_s_per_rad = 0.0;
   return m;
 }
-const CouplingCaps kCaps{2000.0, 5.0};
+const CouplingCaps kCaps{2000.0, 5.0, 20.0, 0.2};  // N/m, N*m/rad, N*s/m, N*m*s/rad
 }  // namespace
 
 TEST(CouplingMode, DeviceStepChangesTheWrenchOnTheVeryNextTick) {
@@ -101,14 +102,14 @@ TEST(CouplingMode, DeviceStepChangesTheWrenchOnTheVeryNextTick) {
   // coupling is felt as -0.5 N at once, not a sim period later.
   auto m = model_at_origin(500, 0);
   Twist6 at_rest{};
-  bool capped = false;
+  std::uint32_t capped = 0;
   EXPECT_NEAR(render_coupling(m, at_rest, kCaps, capped).force_n.z, 1.0, 1e-12);
   Twist6 pushed = at_rest;
   pushed.position_m.x = 0.001;
   Wrench w = render_coupling(m, pushed, kCaps, capped);
   EXPECT_NEAR(w.force_n.x, -0.5, 1e-12) << "the spring opposes the displacement";
   EXPECT_NEAR(w.force_n.z, 1.0, 1e-12);
-  EXPECT_FALSE(capped);
+  EXPECT_EQ(capped, 0u);
 }
 
 TEST(CouplingMode, DampingOpposesRelativeVelocityAndTorqueOpposesRotation) {
@@ -116,7 +117,7 @@ TEST(CouplingMode, DampingOpposesRelativeVelocityAndTorqueOpposesRotation) {
   Twist6 moving{};
   moving.linear_velocity_m_s = {0, 0.1, 0};
   moving.orientation = safety::Quat{std::cos(0.05), 0, 0, std::sin(0.05)};  // 0.1 rad about z
-  bool capped = false;
+  std::uint32_t capped = 0;
   Wrench w = render_coupling(m, moving, kCaps, capped);
   EXPECT_NEAR(w.force_n.y, -0.4, 1e-12);
   EXPECT_NEAR(w.torque_nm.z, -0.2, 1e-9);  // -2 N*m/rad * 0.1 rad
@@ -129,13 +130,30 @@ TEST(CouplingMode, StiffnessIsCappedAndNegativeGainsAreRefused) {
   Twist6 pushed{};
   pushed.position_m.x = 0.001;
   pushed.linear_velocity_m_s.x = 1.0;
-  bool capped = false;
+  std::uint32_t capped = 0;
   Wrench w = render_coupling(m, pushed, kCaps, capped);
   EXPECT_NEAR(w.force_n.x, -2.0, 1e-12);
-  EXPECT_TRUE(capped);
+  EXPECT_EQ(capped, safety::flag_stiffness_capped);
   m.stiffness_n_per_m = -500;
   m.damping_n_s_per_m = 0;
   EXPECT_NEAR(render_coupling(m, pushed, kCaps, capped).force_n.x, 0.0, 1e-12);
+}
+
+TEST(CouplingMode, DampingIsCappedLikeStiffness) {
+  // A sim asking for 1000 N*s/m would turn the handle's velocity noise into force noise and, sampled
+  // at 1 kHz, a damper that pushes back harder than the arm's mass can follow; it gets the rig's
+  // 20 N*s/m. Moving at 0.1 m/s along +y: -2 N, not -100 N. Dr likewise: 0.2 N*m*s/rad at 1 rad/s.
+  auto m = model_at_origin(0, 1000.0);
+  m.angular_stiffness_nm_per_rad = 0;
+  m.angular_damping_nm_s_per_rad = 50.0;
+  Twist6 moving{};
+  moving.linear_velocity_m_s = {0, 0.1, 0};
+  moving.angular_velocity_rad_s = {1.0, 0, 0};
+  std::uint32_t capped = 0;
+  Wrench w = render_coupling(m, moving, kCaps, capped);
+  EXPECT_NEAR(w.force_n.y, -2.0, 1e-12);
+  EXPECT_NEAR(w.torque_nm.x, -0.2, 1e-12);
+  EXPECT_EQ(capped, safety::flag_damping_capped) << "damping, not stiffness, was capped";
 }
 
 TEST(Workspace, MappingScalesAndRotatesPosesAndWrenchesConsistently) {

@@ -84,10 +84,32 @@ static int quantise(double value, double scale, long limit, long* out) {
   return HF_OK;
 }
 
+/* As quantise, then one LSB back toward zero when rounding went past the value: the decoded
+ * magnitude (q / scale) never exceeds the encoded one, so a wrench the safety layer limited, or a
+ * limit the device reports, never arrives larger than it was. The range is quantise's. */
+static int quantise_within(double value, double scale, long limit, long* out) {
+  long q;
+  int r = quantise(value, scale, limit, &q);
+  if (r != HF_OK) return r;
+  if (q > 0 && (double)q / scale > value) --q;
+  else if (q < 0 && (double)q / scale < value) ++q;
+  *out = q;
+  return HF_OK;
+}
+
 /* i16 fields use -32767..32767; -32768 is reserved ("not available") and rejected. */
 static int put_i16_scaled(uint8_t* p, double value, double scale) {
   long q;
   int r = quantise(value, scale, 32767, &q);
+  if (r != HF_OK) return r;
+  put_u16(p, (uint16_t)(int16_t)q);
+  return HF_OK;
+}
+
+/* A bounded quantity (the commanded wrench): rounded, but never past the value. */
+static int put_i16_within(uint8_t* p, double value, double scale) {
+  long q;
+  int r = quantise_within(value, scale, 32767, &q);
   if (r != HF_OK) return r;
   put_u16(p, (uint16_t)(int16_t)q);
   return HF_OK;
@@ -103,7 +125,7 @@ static int get_i16_scaled(const uint8_t* p, double scale, double* out) {
 static int put_u16_scaled(uint8_t* p, double value, double scale) {
   if (!(value >= 0)) return HF_ERR_RANGE;
   long q;
-  int r = quantise(value, scale, 65535, &q);
+  int r = quantise_within(value, scale, 65535, &q); /* only INFO limits are u16 */
   if (r != HF_OK) return r;
   put_u16(p, (uint16_t)q);
   return HF_OK;
@@ -215,8 +237,8 @@ static int parse_state(const uint8_t* p, hf_state* s) {
 
 static int write_command(const hf_command* c, uint8_t* p) {
   if (c->flags & 0xF8) return HF_ERR_RESERVED;
-  for (int i = 0; i < 3; ++i) TRY(put_i16_scaled(p + 2 * i, c->force_n[i], SCALE_FORCE));
-  for (int i = 0; i < 3; ++i) TRY(put_i16_scaled(p + 6 + 2 * i, c->torque_nm[i], SCALE_TORQUE));
+  for (int i = 0; i < 3; ++i) TRY(put_i16_within(p + 2 * i, c->force_n[i], SCALE_FORCE));
+  for (int i = 0; i < 3; ++i) TRY(put_i16_within(p + 6 + 2 * i, c->torque_nm[i], SCALE_TORQUE));
   p[12] = c->flags;
   p[13] = 0;
   return HF_OK;

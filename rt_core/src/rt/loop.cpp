@@ -42,7 +42,9 @@ RtLoop::PerDevice::PerDevice(const config::RigDevice& d, std::int64_t period_ns)
       interpolator(16'666'667, std::uint64_t(period_ns)),
       mode(d.wrench_mode),
       caps{d.limits.max_stiffness_n_per_m / workspace.linear_gain(),
-           d.limits.max_angular_stiffness_nm_per_rad / workspace.angular_gain()} {}
+           d.limits.max_angular_stiffness_nm_per_rad / workspace.angular_gain(),
+           d.limits.max_coupling_damping_n_s_per_m / workspace.linear_gain(),
+           d.limits.max_coupling_angular_damping_nm_s_per_rad / workspace.angular_gain()} {}
 
 RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Device>> devices, LoopOptions options)
     : rig_(rig) {
@@ -52,6 +54,11 @@ RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Devic
   for (std::size_t i = 0; i < devices.size(); ++i) {
     devices_.push_back(std::make_unique<PerDevice>(rig.devices[i], rig.rt.period_ns));
     devices_.back()->device = std::move(devices[i]);
+    // Counts from before the loop are not this run's (a foreign command heard at open is: it
+    // still latches on the first tick).
+    const device::DeviceHealth health = devices_.back()->device->health();
+    devices_.back()->device_restarts = health.device_restarts;
+    devices_.back()->commands_lost = health.commands_lost;
     auto& entry = states_record_.devices[i];
     std::strncpy(entry.name, rig.devices[i].name.c_str(), sizeof entry.name - 1);
     entry.present = 1;
@@ -129,7 +136,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   Twist6 scene = d.workspace.to_scene(valid ? device_twist(d.state) : Twist6{});
   const shm::CouplingModel& model = sample_.couplings[index];
   bool coupled = have_sample_ && index < sample_.device_count && model.valid == 1;
-  bool capped = false;
+  std::uint32_t capped = 0;  // flag_stiffness_capped, flag_damping_capped
   safety::Wrench scene_command{};
   if (d.mode == config::WrenchMode::interpolate) {
     if (new_sample) d.interpolator.on_sample(coupled ? safety::Wrench{safety::from(model.force_n), safety::from(model.torque_nm)}
@@ -141,21 +148,32 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   }
 
   device::DeviceHealth health = d.device->health();
+  // A device that rebooted lost whatever it had applied; its new stream is taken up like after
+  // any link loss: this state counts as invalid, and link recovery and the engage gate decide
+  // when the wrench returns.
+  const bool restarted = health.device_restarts != d.device_restarts;
+  d.device_restarts = health.device_restarts;
+  const bool foreign = health.foreign_commands != d.foreign_commands;
+  d.foreign_commands = health.foreign_commands;
+  const auto lost = static_cast<std::uint32_t>(health.commands_lost - d.commands_lost);
+  d.commands_lost = health.commands_lost;
   safety::SafetyInput in;
   in.now_ns = now;
   in.command = d.workspace.to_device(scene_command);
   in.linear_velocity_m_s = safety::from(d.state.linear_velocity_m_s);
   in.angular_velocity_rad_s = safety::from(d.state.angular_velocity_rad_s);
   in.fresh_frame = d.fresh;
-  in.state_valid = valid;
+  in.state_valid = valid && !restarted;
   in.device_fault = d.state.fault != 0 || !health.connected;
   in.deadman_pressed = (d.state.buttons & 1u) != 0;
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
+  in.foreign_command = foreign;
+  in.commands_lost = lost;
   in.sim_age_ms = sim_age_ms(now);
   in.sim_restarted = d.sim_restarted;
   d.sim_restarted = false;
   safety::SafetyOutput out = d.safety.step(in);
-  if (capped) out.flags |= safety::flag_stiffness_capped;
+  out.flags |= capped;
 
   safety::to(out.wrench.force_n, d.command.force_n);
   safety::to(out.wrench.torque_nm, d.command.torque_nm);

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "hapfluid/safety/flags.hpp"
+
 namespace hapfluid::rt {
 
 void InterpolatingRenderer::on_sample(const Wrench& w, std::uint64_t receive_ns) {
@@ -30,20 +32,23 @@ void InterpolatingRenderer::reset() {
   have_sample_ = false;
 }
 
-Wrench render_coupling(const shm::CouplingModel& m, const Twist6& d, const CouplingCaps& caps, bool& capped) {
-  double k = std::max(0.0, m.stiffness_n_per_m);
-  double kr = std::max(0.0, m.angular_stiffness_nm_per_rad);
-  double damping = std::max(0.0, m.damping_n_s_per_m);
-  double angular_damping = std::max(0.0, m.angular_damping_nm_s_per_rad);
-  capped = false;
-  if (k > caps.max_stiffness_n_per_m) {
-    k = caps.max_stiffness_n_per_m;
-    capped = true;
-  }
-  if (kr > caps.max_angular_stiffness_nm_per_rad) {
-    kr = caps.max_angular_stiffness_nm_per_rad;
-    capped = true;
-  }
+namespace {
+// A gain above its cap is reduced to it and `flag` set; a negative one (active) becomes 0.
+double capped_gain(double gain, double cap, std::uint32_t flag, std::uint32_t& flags) {
+  gain = std::max(0.0, gain);
+  if (gain <= cap) return gain;
+  flags |= flag;
+  return cap;
+}
+}  // namespace
+
+Wrench render_coupling(const shm::CouplingModel& m, const Twist6& d, const CouplingCaps& caps, std::uint32_t& flags) {
+  const double k = capped_gain(m.stiffness_n_per_m, caps.max_stiffness_n_per_m, safety::flag_stiffness_capped, flags);
+  const double kr = capped_gain(m.angular_stiffness_nm_per_rad, caps.max_angular_stiffness_nm_per_rad,
+                                safety::flag_stiffness_capped, flags);
+  const double damping = capped_gain(m.damping_n_s_per_m, caps.max_damping_n_s_per_m, safety::flag_damping_capped, flags);
+  const double angular_damping = capped_gain(m.angular_damping_nm_s_per_rad, caps.max_angular_damping_nm_s_per_rad,
+                                             safety::flag_damping_capped, flags);
   using safety::from;
   V3 dx = d.position_m - from(m.x0_m);
   V3 dtheta = safety::rotation_vector(safety::normalized(d.orientation) *

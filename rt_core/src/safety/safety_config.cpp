@@ -27,6 +27,8 @@ SafetyConfig make_safety_config(const config::RigDevice& d, std::int64_t period_
   c.engage_threshold_nm = w.engage_threshold_nm > 0 ? w.engage_threshold_nm
                                                     : w.engage_threshold_n * l.max_torque_nm / l.max_force_n;
   c.link_recover_ms = w.link_recover_ms;
+  c.lost_command_window_ms = w.lost_command_window_ms;
+  c.max_lost_commands = w.max_lost_commands;
   c.engage_hold_ms = w.engage_hold_ms;
   c.engage_small_ms = w.engage_small_ms;
   c.engage_steady_band_n = w.engage_steady_band_n;
@@ -55,6 +57,7 @@ std::string describe(const SafetyConfig& c) {
       "  engage_threshold_n = %g, engage_ramp_ms = %g (rig)\n  require_deadman = %s (rig)\n"
       "  engage_threshold_nm = %g (rig, or engage_threshold_n * max_torque_nm / max_force_n)\n"
       "  link_recover_ms = %g (rig)\n"
+      "  max_lost_commands = %g per lost_command_window_ms = %g (rig)\n"
       "  engage_small_ms = %g (rig)\n"
       "  engage_hold_ms = %g, engage_steady_band_n = %g, engage_steady_band_nm = %g (rig; 0 ms: only small commands engage)\n"
       "  engage_ramp_rate_n_per_s = %g, engage_ramp_rate_nm_per_s = %g (rig)\n"
@@ -63,6 +66,7 @@ std::string describe(const SafetyConfig& c) {
       c.max_torque_axis_nm.x, c.max_torque_axis_nm.y, c.max_torque_axis_nm.z, c.max_force_rate_n_per_s,
       c.max_torque_rate_nm_per_s, c.sim_stale_ms, c.sim_ramp_down_ms, c.link_timeout_ms, c.engage_threshold_n,
       c.engage_ramp_ms, c.require_deadman ? "true" : "false", c.engage_threshold_nm, c.link_recover_ms,
+      c.max_lost_commands, c.lost_command_window_ms,
       c.engage_small_ms, c.engage_hold_ms, c.engage_steady_band_n, c.engage_steady_band_nm, c.engage_ramp_rate_n_per_s,
       c.engage_ramp_rate_nm_per_s,
       c.passivity_enabled ? "on" : "off", c.passivity_max_damping_n_s_per_m, c.passivity_max_damping_nm_s_per_rad,
@@ -88,13 +92,14 @@ std::string flag_names(std::uint32_t flags) {
                                       "torque_norm_limited", "torque_axis_limited", "rate_limited",
                                       "passivity_damping", "waiting_to_engage",  "engaging",
                                       "sim_stale_ramp",     "deadman_released",   "stiffness_capped",
-                                      "hard_zero"};
-  return names(flags, table, 13);
+                                      "hard_zero",          "damping_capped"};
+  return names(flags, table, 14);
 }
 
 std::string fault_names(std::uint32_t faults) {
-  static const char* const table[] = {"estop", "link_timeout", "link_invalid", "device_reported", "sim_stale"};
-  return names(faults, table, 5);
+  static const char* const table[] = {"estop",     "link_timeout", "link_invalid", "device_reported",
+                                      "sim_stale", "foreign_command", "communication_constraints_violation"};
+  return names(faults, table, 7);
 }
 
 }  // namespace hapfluid::safety

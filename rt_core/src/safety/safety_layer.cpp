@@ -89,6 +89,12 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   if (in.estop_input || estop_requested_) estop_latched_ = true;
   estop_requested_ = false;
   if (estop_latched_) faults_ |= fault_estop;
+  if (in.foreign_command) faults_ |= fault_foreign_command;
+  // Communication constraint: a link that loses commands now and then (a device tick that took
+  // two) is fine; one that loses them in bulk renders a wrench the hand does not get.
+  lost_bucket_ = std::max(0.0, lost_bucket_ - dt_ms * config_.max_lost_commands / config_.lost_command_window_ms);
+  lost_bucket_ += in.commands_lost;
+  if (lost_bucket_ > config_.max_lost_commands) faults_ |= fault_communication_constraints;
   update_link(checked);
 
   // 1-3: sanitize, passivity, limits.
@@ -157,7 +163,8 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
 bool SafetyLayer::reset_estop() {
   if (estop_input_held_) return false;
   estop_latched_ = false;
-  faults_ &= ~fault_estop;
+  faults_ &= ~(fault_estop | fault_foreign_command | fault_communication_constraints);
+  lost_bucket_ = 0;
   return true;
 }
 

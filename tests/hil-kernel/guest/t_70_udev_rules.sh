@@ -9,6 +9,8 @@ set -eu
 . "$HIL_GUEST/lib.sh"
 rules="$HIL_SRC/firmware_bridge/udev/70-hapfluid.rules"
 [ -f "$rules" ] || fail "the project ships no udev rules at $rules"
+# the group only: uaccess would hand a force-producing arm to whoever sits at the seat
+! grep -v '^#' "$rules" | grep -qi uaccess || fail "70-hapfluid.rules tags a device uaccess"
 mkdir -p /run/udev/rules.d
 cp "$rules" /run/udev/rules.d/
 # The group the rules name must resolve, as after `make install` on a rig: a guest-only

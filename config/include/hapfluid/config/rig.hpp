@@ -45,6 +45,8 @@ struct DeviceLimits {
   double max_torque_rate_nm_per_s = 50.0;
   double max_stiffness_n_per_m = 2000.0;        // caps the coupling-mode K rendered at 1 kHz
   double max_angular_stiffness_nm_per_rad = 5.0;
+  double max_coupling_damping_n_s_per_m = 20.0; // caps the coupling-mode D rendered at 1 kHz
+  double max_coupling_angular_damping_nm_s_per_rad = 0.2;
   double device_damping_n_s_per_m = 2.0;        // physical damping of the arm (passivity bound)
 };
 
@@ -67,6 +69,11 @@ struct Watchdogs {
   double engage_ramp_rate_n_per_s = 20.0;
   double engage_ramp_rate_nm_per_s = 0.0;
   double device_watchdog_ms = 20.0;  // device firmware: no valid command for this long -> motors off
+  // Communication constraint: more than max_lost_commands commands the device never applied
+  // (lost, or superseded in one of its ticks), counted in a leaky bucket that drains
+  // max_lost_commands per lost_command_window_ms, latch a fault until the operator's reset.
+  double lost_command_window_ms = 100.0;
+  double max_lost_commands = 50.0;
 };
 
 // Time-domain passivity observer/controller (Hannaford & Ryu 2002) in the 1 kHz loop.

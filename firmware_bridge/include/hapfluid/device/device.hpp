@@ -40,6 +40,10 @@ struct DeviceHealth {
   std::uint64_t send_errors = 0;
   std::uint64_t last_valid_ns = 0;    // CLOCK_MONOTONIC of the newest valid frame
   std::uint32_t transport_errors = 0; // bit set: bus-off, error-passive, disconnected, ...
+  std::uint64_t drains_cut_short = 0; // polls that stopped at the drain bound (a frame flood)
+  std::uint32_t device_restarts = 0;  // the device's state counter began again (it rebooted)
+  std::uint64_t foreign_commands = 0; // COMMANDs for this device heard on its bus that we did not send
+  std::uint64_t commands_lost = 0;    // our commands the device never applied (its echo skipped them)
   bool connected = false;
 };
 

@@ -29,12 +29,23 @@ class HapticArm final : public Device {
 
  private:
   void handle(const hf_message& message, std::uint64_t now_ns, bool& updated);
+  // STATE sequence check; takes up a device whose counter restarted (health().device_restarts).
+  bool accept_state_sequence(std::uint16_t seq);
+  // Counts the commands the device's echo skipped (health().commands_lost); `device_ticks`: the
+  // device's states since the last one received (1, or more when states were lost).
+  void count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks);
+  // This many consecutive "older" states, each one after the other, mean a restarted counter.
+  static constexpr std::uint32_t kRestartRun = 3;
 
   std::string name_;
   std::unique_ptr<MessageLink> link_;
   DeviceState latest_{};
   DeviceHealth health_{};
   hf_seq_tracker state_seq_{};
+  std::uint32_t older_run_ = 0;      // consecutive rejected states, each the previous one + 1
+  std::uint16_t older_last_ = 0;
+  std::uint8_t last_echo_ = 0;
+  bool last_echo_ours_ = false;      // last_echo_ names one of our recent commands
   std::uint32_t reconnects_seen_ = 0;  // transport reconnections already accounted for
   hf_info info_{};
   bool has_info_ = false;

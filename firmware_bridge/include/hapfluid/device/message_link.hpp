@@ -13,6 +13,12 @@
 namespace hapfluid::device {
 
 enum class Framing { can, canfd, hid, bulk };
+
+// The most wire units one drain (a poll of the 1 kHz loop, a tick of the device) reads: 20 ms of
+// a classic-CAN device's traffic (6 units per ms), so a loop that stalled catches up within a
+// tick, while a flood of frames (valid, foreign or broken) cannot hold the thread; what is left
+// waits for the next drain.
+inline constexpr int kDrainUnitBudget = 128;
 enum class Side { host, device };
 
 // "can", "canfd", "hid", "bulk"; throws TransportError otherwise.
@@ -26,9 +32,10 @@ class MessageLink {
   // Encodes and sends; false when the message is not encodable (last_encode_result() says why)
   // or the transport refused a unit.
   bool send(const hf_message& message);
-  // Io::ok: `out` holds the next valid message. Io::empty: nothing (more) pending. Io::error:
-  // the transport failed. Invalid units are counted in frames_bad() and skipped.
-  Io receive(hf_message& out);
+  // Io::ok: `out` holds the next valid message. Io::empty: nothing (more) pending, or
+  // `unit_budget` (wire units this drain may still read, decremented per unit) is spent.
+  // Io::error: the transport failed. Invalid units are counted in frames_bad() and skipped.
+  Io receive(hf_message& out, int& unit_budget);
 
   Transport& transport() { return *transport_; }
   const Transport& transport() const { return *transport_; }

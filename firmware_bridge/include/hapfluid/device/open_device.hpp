@@ -13,7 +13,11 @@
 
 namespace hapfluid::device {
 
-std::unique_ptr<Device> open_device(const config::RigDevice& rig_device);
+// A haptic arm that answers INFO at open must fit the rig (rig_fit.hpp), or this throws naming the
+// mismatch. `skip`: a tool with no rig of its own (the probe given only an address) reports the
+// device's INFO instead.
+enum class RigFitCheck { enforce, skip };
+std::unique_ptr<Device> open_device(const config::RigDevice& rig_device, RigFitCheck check = RigFitCheck::enforce);
 
 // What to tell the user about a device that opened but stayed silent through the handshake
 // (health().connected false): not connected (kDisconnected: no USB device, CAN interface or

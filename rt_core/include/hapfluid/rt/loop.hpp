@@ -98,6 +98,9 @@ class RtLoop {
     device::DeviceCommand command;
     LinkQuality link;
     bool fresh = false;
+    std::uint32_t device_restarts = 0;  // health().device_restarts already taken as a link loss
+    std::uint64_t foreign_commands = 0; // health().foreign_commands already latched
+    std::uint64_t commands_lost = 0;    // health().commands_lost already counted
     bool sim_restarted = false;    // a new sim incarnation's first sample, not yet seen by the safety layer
     safety::Wrench scene_wrench;
   };

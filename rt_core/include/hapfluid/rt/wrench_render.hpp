@@ -12,8 +12,9 @@
 //     tau = tau0 - Kr rotvec(q q0^-1)     + Dr (w0 - w)
 //   against the current device pose every tick, so the spring is closed at 1 kHz where passivity
 //   needs it and a device step changes the wrench within one tick. (The stiffness term opposes
-//   the displacement: the spring pulls the hand back toward the pose the sim solved for.) K and Kr
-//   are capped by the rig's max closed-loop stiffness; F0 still updates at the sim rate.
+//   the displacement: the spring pulls the hand back toward the pose the sim solved for.) K, Kr,
+//   D and Dr are capped by the rig's max closed-loop stiffness and damping; F0 still updates at
+//   the sim rate.
 #pragma once
 
 #include <cstdint>
@@ -48,15 +49,19 @@ class InterpolatingRenderer {
   bool have_sample_ = false;
 };
 
+// Scene units: the rig's device caps divided by the workspace gain (linear_gain() for K and D,
+// angular_gain() for Kr and Dr), since both scale a scene gain into what the hand feels alike.
 struct CouplingCaps {
-  double max_stiffness_n_per_m;             // scene units (rig cap / workspace linear gain)
-  double max_angular_stiffness_nm_per_rad;  // scene units
+  double max_stiffness_n_per_m;
+  double max_angular_stiffness_nm_per_rad;
+  double max_damping_n_s_per_m;
+  double max_angular_damping_nm_s_per_rad;
 };
 
 // Evaluates the local coupling model against the device's current scene-frame pose and twist.
-// Negative K/D are treated as 0 (they would be active); K above the cap is reduced and
-// `stiffness_capped` is set.
+// Negative K/D are treated as 0 (they would be active); K or Kr above its cap is reduced and
+// sets safety::flag_stiffness_capped in `flags`, D or Dr above its cap safety::flag_damping_capped.
 Wrench render_coupling(const shm::CouplingModel& model, const Twist6& device_scene, const CouplingCaps& caps,
-                       bool& stiffness_capped);
+                       std::uint32_t& flags);
 
 }  // namespace hapfluid::rt

@@ -22,6 +22,7 @@ enum Flag : std::uint32_t {
   flag_deadman_released = 1u << 10,
   flag_stiffness_capped = 1u << 11,  // coupling-mode K was reduced to the rig's maximum
   flag_hard_zero = 1u << 12,         // a hard gate (fault, e-stop, deadman) zeroed the output
+  flag_damping_capped = 1u << 13,    // coupling-mode D was reduced to the rig's maximum
 };
 
 enum Fault : std::uint32_t {
@@ -30,6 +31,10 @@ enum Fault : std::uint32_t {
   fault_link_invalid = 1u << 2,      // the device delivered a non-finite/invalid state
   fault_device_reported = 1u << 3,   // the device's own fault bits are set or it is disconnected
   fault_sim_stale = 1u << 4,         // no fresh sim sample within sim_stale_ms (ramps, not a hard zero)
+  fault_foreign_command = 1u << 5,   // a command for this device that we did not send was heard on
+                                     // its bus; latched, cleared only by the operator reset
+  fault_communication_constraints = 1u << 6,  // too many commands lost (libfranka's
+                                     // communication_constraints_violation); latched like the above
 };
 
 // "force_norm_limited|rate_limited"; "-" for none.

@@ -36,6 +36,8 @@ struct SafetyConfig {
   double engage_ramp_rate_n_per_s = 20.0;
   double engage_ramp_rate_nm_per_s = 1.0;
   double link_recover_ms = 100.0;                // healthy link this long before the link fault clears
+  double lost_command_window_ms = 100.0;         // communication constraint (rig.hpp, Watchdogs)
+  double max_lost_commands = 50.0;
   double passivity_max_damping_n_s_per_m = 20.0; // most damping the passivity controller may add
   double passivity_max_damping_nm_s_per_rad = 0.2;
   double passivity_energy_cap_j = 0.2;           // the observer's stored-energy reservoir cap

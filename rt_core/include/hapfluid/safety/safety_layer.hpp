@@ -22,12 +22,16 @@
 //                                so the rise is deliberate and step 6 never has to shape it.
 //   6. rate limit                change per tick <= max_*_rate * period (uniform scaling, so the
 //                                limits of step 3 still hold).
-//   7. hard gates                latched e-stop, link timeout/invalid state, device fault, deadman
+//   7. hard gates                latched e-stop, foreign command or communication-constraint
+//                                violation, link timeout/invalid state, device fault, deadman
 //                                released (when required) -> exactly zero at once, bypassing the
 //                                rate limit: zero is always the safe command.
 //   8. passivity observer        accounts for the wrench actually sent.
 //
-// Recovery rules: e-stop needs reset_estop() while the e-stop input is released; link faults
+// Recovery rules: e-stop needs reset_estop() while the e-stop input is released, and so does a
+// foreign command (someone else commanding our device: whoever it is, the operator must look
+// before force returns), and so does a communication-constraint violation (more lost commands
+// than max_lost_commands, in a bucket draining that many per lost_command_window_ms); link faults
 // clear after link_recover_ms of healthy frames, then the wrench re-engages through step 5;
 // sim staleness clears with the first fresh sample and resumes through the step-4 ramp when it is
 // the same sim, late (a stall: its bodies and couplings carry on from where the hand left them);
@@ -57,6 +61,8 @@ struct SafetyInput {
   bool device_fault = false;       // device-reported fault bits, or the transport is disconnected
   bool deadman_pressed = false;
   bool estop_input = false;        // e-stop button / operator request (latches)
+  bool foreign_command = false;    // someone else sent this device a command (latches)
+  std::uint32_t commands_lost = 0; // commands the device reported not applied since the last step
   double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
   bool sim_restarted = false;      // this tick's sample is the first from a new sim (or the first ever)
 };
@@ -76,7 +82,8 @@ class SafetyLayer {
   SafetyLayer& operator=(const SafetyLayer&) = delete;
 
   SafetyOutput step(const SafetyInput& input);
-  // Explicit operator reset of a latched e-stop; refused (false) while the e-stop input is held.
+  // Explicit operator reset of a latched e-stop and a latched foreign-command fault; refused
+  // (false) while the e-stop input is held.
   bool reset_estop();
   // Operator request: latches the e-stop on the next step.
   void request_estop() { estop_requested_ = true; }
@@ -101,6 +108,7 @@ class SafetyLayer {
   bool estop_requested_ = false;
   bool estop_input_held_ = false;
   bool seen_frame_ = false;
+  double lost_bucket_ = 0;         // lost commands, draining max_lost_commands per window
   std::uint64_t last_fresh_ns_ = 0;
   std::uint64_t last_now_ns_ = 0;
   std::uint64_t healthy_since_ns_ = 0;

@@ -20,6 +20,12 @@ extern "C" {
 #define HF_PACKET_CRC_BYTES 2u
 #define HF_PACKET_MAX_BYTES 38u /* STATE, the largest */
 
+/* Full scale of the COMMAND wrench per axis (i16 at 1 mN and 0.1 mN.m) and the INFO watchdog
+ * (u8 ms): a rig limit beyond them could never be sent (config checks rigs against them). */
+#define HF_WIRE_MAX_FORCE_N 32.767
+#define HF_WIRE_MAX_TORQUE_NM 3.2767
+#define HF_WIRE_MAX_WATCHDOG_MS 255
+
 /* Message types; the classic-CAN function code of each message's first frame is in protocol.md. */
 typedef enum {
   HF_MSG_STATE = 1,            /* device -> host, every 1 ms */
