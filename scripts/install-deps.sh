@@ -67,7 +67,7 @@ for p in "${python_packages[@]}"; do
     "$venv/bin/python" -m pip show -q "$p" >/dev/null 2>&1 || pymissing+=("$p")
   else
     # Pinned: the installed version must be the pin's.
-    have="$("$venv/bin/python" -m pip show "$name" 2>/dev/null | sed -n 's/^Version: //p')"
+    have="$("$venv/bin/python" -m pip show "$name" 2>/dev/null | sed -n 's/^Version: //p' || true)"
     [ "$have" = "${p#*==}" ] || pymissing+=("$p")
   fi
 done
