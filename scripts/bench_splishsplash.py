@@ -19,6 +19,7 @@ OUT_DIR/splishsplash/<case>/ (scene JSON, splash.log, stats.json).
 """
 import argparse
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -91,6 +92,15 @@ def run_splishsplash(scene: pathlib.Path, duration_s: float, out: pathlib.Path) 
     return record
 
 
+def with_machine_load(run_function, *args) -> dict:
+    """Runs one code and records the 1-minute load average before it: on a shared 2-core machine
+    the OpenMP threads of SPlisHSPlasH lose far more to other jobs than hapfluid's do."""
+    load = os.getloadavg()[0]
+    record = run_function(*args)
+    record["load_average_1min"] = load
+    return record
+
+
 def metrics_of(run: dict) -> dict:
     m = {k: v for k, v in run.items() if k not in ("solver", "fluid_particles")}
     m["us_per_sim_s_per_particle_steps"] = per_particle_us(run["steps_wall_s"], run["simulated_s"], run["fluid_particles"])
@@ -119,7 +129,8 @@ def summary_line(code: str, run: dict) -> str:
     m = metrics_of(run)
     return (f"{code} ({run['solver']}): {run['fluid_particles']} fluid particles, {run['steps']} steps "
             f"(mean dt {1000 * run['mean_dt_s']:.3f} ms), {run['steps_wall_s']:.1f} s in steps, "
-            f"{run['process_wall_s']:.1f} s process: {m['us_per_sim_s_per_particle_steps']:.2f} us/(sim s x particle)")
+            f"{run['process_wall_s']:.1f} s process: {m['us_per_sim_s_per_particle_steps']:.2f} us/(sim s x particle); "
+            f"load average {run['load_average_1min']:.1f} before")
 
 
 def main():
@@ -139,10 +150,10 @@ def main():
         duration = splishsplash.load_case(scene)["duration_s"]
         try:
             progress(f"{name}: hapfluid, {scene.relative_to(ROOT)}, {duration} s simulated, {THREADS} threads ...")
-            hapfluid = run_hapfluid(args.build.resolve(), scene, duration, work / name / "hapfluid")
+            hapfluid = with_machine_load(run_hapfluid, args.build.resolve(), scene, duration, work / name / "hapfluid")
             progress(f"{name}: {summary_line('hapfluid', hapfluid)}")
             progress(f"{name}: SPlisHSPlasH DFSPH, same scene, {duration} s simulated, {THREADS} threads ...")
-            splash = run_splishsplash(scene, duration, work / name / "splishsplash")
+            splash = with_machine_load(run_splishsplash, scene, duration, work / name / "splishsplash")
             progress(f"{name}: {summary_line('SPlisHSPlasH', splash)}")
         except (RuntimeError, ValueError, OSError, subprocess.TimeoutExpired) as error:
             sys.exit(f"bench_splishsplash: {name}: {error}")

@@ -55,6 +55,8 @@ def test_dam_break_wall_box_is_the_tomls_tank(dam_break_json):
     assert lo == pytest.approx([0.0, 0.0, 0.0])
     assert hi == pytest.approx([0.50, 0.05, 0.30])
     assert box["isWall"] and not box["isDynamic"] and box["mapInvert"]
+    # A wall thickness of one particle radius: the lattice starts at rest against it.
+    assert box["mapThickness"] == pytest.approx(0.0025)
 
 
 def test_dam_break_runs_dfsph_at_the_tomls_resolution_gravity_and_step_cap(dam_break_json):
