@@ -1,8 +1,8 @@
 """SPlisHSPlasH (the `pysplishsplash` wheel) as a reference solver for hapfluid's scenes.
 
 Three things, each a function of its inputs except `run`:
-  - `scene_json(scene_toml)`: the same case as one of our scene files, in SPlisHSPlasH's scene
-    format: the fluid blocks on hapfluid's lattice, the domain box as a static wall, DFSPH;
+  - `scene_json(scene_toml, box_obj)`: the same case as one of our scene files, in
+    SPlisHSPlasH's scene format: the TOML's fluid blocks, the domain box as a wall, DFSPH;
   - `parse_timing_summary(text)`: the timing summary `splash` prints at exit;
   - `run(scene_json_path, ...)`: `splash --no-gui` on it, with the wheel's own libGLdispatch
     preloaded, timed as a whole process.
