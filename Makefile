@@ -2,7 +2,7 @@
 #   make          install what is missing, build
 #   make test     ... and run every test (ctest + pytest), with their summaries
 #   make run      ... and run the main job (SCENE=<name> for another scene)
-#   make bench    ... and run every benchmark, JSON under out/bench/
+#   make bench    ... and run every benchmark, JSON under out/bench/ (installs SPlisHSPlasH for the comparison)
 #   make hil      ... and run the QEMU hardware-in-the-loop suite (KERNEL=rt: PREEMPT_RT kernel)
 #   make install  install binaries, config and systemd units (PREFIX=/usr/local)
 #   make clean    remove build/ and out/
@@ -37,6 +37,7 @@ run: build
 	@$(PY) scripts/hapfluid.py run --build $(BUILD) --scene $(SCENE) $(if $(DURATION),--duration $(DURATION))
 
 bench: build
+	@bash scripts/install-deps.sh bench
 	@$(PY) scripts/run_benchmarks.py --build $(BUILD) --out out/bench
 
 install: build

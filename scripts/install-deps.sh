@@ -5,6 +5,7 @@
 #
 #   scripts/install-deps.sh            core: build, test, run
 #   scripts/install-deps.sh hil        core + what the QEMU hardware-in-the-loop suite needs
+#   scripts/install-deps.sh bench      core + SPlisHSPlasH (PyPI wheel), the benchmarks' reference solver
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -22,9 +23,16 @@ debian_core=(
 )
 debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
 python_packages=(pytest numpy matplotlib python-can cantools hypothesis)
+# Only bench_splishsplash.py uses it; pinned so that its scene format and log stay what we parse.
+python_bench=(pysplishsplash==2.19.0)
 
 want=("${debian_core[@]}")
 [ "$group" = hil ] && want+=("${debian_hil[@]}")
+case "$group" in
+  core|hil) ;;
+  bench) python_packages+=("${python_bench[@]}") ;;
+  *) echo "install-deps: unknown group '$group' (core, hil or bench)" >&2; exit 2 ;;
+esac
 
 missing=()
 for p in "${want[@]}"; do
@@ -54,7 +62,14 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 pymissing=()
 for p in "${python_packages[@]}"; do
-  "$venv/bin/python" -m pip show -q "$p" >/dev/null 2>&1 || pymissing+=("$p")
+  name="${p%%==*}"
+  if [ "$name" = "$p" ]; then
+    "$venv/bin/python" -m pip show -q "$p" >/dev/null 2>&1 || pymissing+=("$p")
+  else
+    # Pinned: the installed version must be the pin's.
+    have="$("$venv/bin/python" -m pip show "$name" 2>/dev/null | sed -n 's/^Version: //p' || true)"
+    [ "$have" = "${p#*==}" ] || pymissing+=("$p")
+  fi
 done
 if [ ${#pymissing[@]} -gt 0 ]; then
   echo "install-deps: installing Python packages into .venv: ${pymissing[*]}"
