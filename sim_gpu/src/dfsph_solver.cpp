@@ -290,11 +290,7 @@ void DfsphSolver::integrate_positions(float dt) {
       for (int a = 0; a < 3; ++a) {
         float v = vel[a][i];
         float x = pos[a][i] + v * dt;
-        if (x < p.clamp_lo[a]) {
-          x = p.clamp_lo[a], v = v < 0 ? 0 : v, out = true;
-        } else if (x > p.clamp_hi[a]) {
-          x = p.clamp_hi[a], v = v > 0 ? 0 : v, out = true;
-        }
+        out = clamp_to_domain(p, a, x, v) || out;
         vel[a][i] = v;
         pos[a][i] = x;
       }

@@ -12,23 +12,11 @@
 #include "hapfluid/sim/model.hpp"
 #include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/wall_map.hpp"
+#include "test_support.hpp"
 
 using namespace hapfluid::sim;
 
-namespace {
-
-template <class F>
-double radial_integral(F f, double h) {
-  const int n = 200000;
-  double sum = 0;
-  for (int i = 0; i < n; ++i) {
-    const double r = (i + 0.5) * h / n;
-    sum += 4 * kPi * r * r * f(r) * (h / n);
-  }
-  return sum;
-}
-
-}  // namespace
+using hapfluid::sim::test::radial_integral;
 
 // A kernel that does not integrate to one scales every density by that factor.
 TEST(CubicKernel, IntegratesToOneOverItsSupport) {

@@ -8,24 +8,11 @@
 #include "hapfluid/sim/gradient_correction.hpp"
 #include "hapfluid/sim/kernels.hpp"
 #include "hapfluid/sim/model.hpp"
+#include "test_support.hpp"
 
 using namespace hapfluid::sim;
 
-namespace {
-
-// Integral over 3D space of a radial function: 4 pi int_0^h r^2 f(r) dr (midpoint rule).
-template <class F>
-double radial_integral(F f, double h) {
-  const int n = 200000;
-  double sum = 0;
-  for (int i = 0; i < n; ++i) {
-    const double r = (i + 0.5) * h / n;
-    sum += 4 * kPi * r * r * f(r) * (h / n);
-  }
-  return sum;
-}
-
-}  // namespace
+using hapfluid::sim::test::radial_integral;
 
 TEST(Kernels, Poly6SpikyAndViscosityIntegrateToOne) {
   for (double h : {0.01, 0.02, 0.1}) {

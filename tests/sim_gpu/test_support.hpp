@@ -17,6 +17,18 @@
 
 namespace hapfluid::sim::test {
 
+// Integral over 3D space of a radial function: 4 pi int_0^h r^2 f(r) dr (midpoint rule).
+template <class F>
+double radial_integral(F f, double h) {
+  const int n = 200000;
+  double sum = 0;
+  for (int i = 0; i < n; ++i) {
+    const double r = (i + 0.5) * h / n;
+    sum += 4 * kPi * r * r * f(r) * (h / n);
+  }
+  return sum;
+}
+
 inline std::filesystem::path temp_dir(const std::string& name) {
   auto dir = std::filesystem::temp_directory_path() / ("hapfluid_sim_" + name + "_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);

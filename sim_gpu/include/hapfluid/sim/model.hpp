@@ -54,6 +54,21 @@ struct SimulationParams {
   double frame_rate_hz = 60;
 };
 
+// The last-resort clamp of one coordinate of a fluid particle moving to x with velocity v: put
+// back at clamp_lo/clamp_hi with its outward velocity removed. Returns whether it acted (a
+// fault: the walls alone must hold the fluid).
+inline bool clamp_to_domain(const SimulationParams& p, int axis, float& x, float& v) {
+  if (x < p.clamp_lo[axis]) {
+    x = p.clamp_lo[axis], v = v < 0 ? 0 : v;
+    return true;
+  }
+  if (x > p.clamp_hi[axis]) {
+    x = p.clamp_hi[axis], v = v > 0 ? 0 : v;
+    return true;
+  }
+  return false;
+}
+
 struct DeviceInfo {
   std::string name;
   config::ScriptedMotion motion;  // scripted hand (batch runs), or the start pose of a rig device
