@@ -94,7 +94,9 @@ def test_batch_run_writes_every_output(binary, tmp_path):
     assert stats["particles"]["fluid"] > 500 and stats["particles"]["body"] > 20
     assert abs(stats["simulated_time_s"] - 0.1) < 1e-9
     assert stats["steps"] >= 10 and stats["steps_per_s"] > 0 and stats["real_time_factor"] > 0
-    assert set(stats["phase_ms_per_step"]) == {"neighbour_search", "density", "forces", "bodies", "integration"}
+    assert set(stats["phase_ms_per_step"]) == {"neighbour_search", "density", "forces", "pressure_solve", "bodies",
+                                               "integration"}
+    assert stats["solver"] == "wcsph"
 
     frames = sorted((out / "particles").glob("frame_*.vtk"))
     assert [f.name for f in frames] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]

@@ -84,10 +84,12 @@ usb_present() {
 # proves the function (silence -> motors off, fault reported) without flaking on emulation.
 HIL_WATCHDOG_MS=250
 # device_check ARGS...: runs hil-device-check; fails the test unless it passed, including its
-# final close (a driver that crashes when the loop shuts down takes haptic-rt with it).
+# final close (a driver that crashes when the loop shuts down takes haptic-rt with it). Its rig
+# device declares the fake devices' HIL_WATCHDOG_MS: open refuses a device whose INFO reply
+# reports a longer watchdog than the rig assumes.
 device_check() {
     local rc=0
-    "$HIL_BUILD/hil/bin/hil-device-check" "$@" >check.out 2>&1 || rc=$?
+    "$HIL_BUILD/hil/bin/hil-device-check" --device-watchdog-ms "$HIL_WATCHDOG_MS" "$@" >check.out 2>&1 || rc=$?
     cat check.out
     [ $rc -eq 0 ] || { echo "hil-device-check exited with status $rc"; return 1; }
     grep -q "^PHASE close" check.out || { echo "hil-device-check did not close the device"; return 1; }
