@@ -356,7 +356,7 @@ int main(int argc, char** argv) {
     }
     else if (a == "--limit-s") o.limit_s = std::atof(v.c_str());
     // The rig's idea of the device's command watchdog, checked against its INFO reply at open.
-    else if (a == "--device-watchdog-ms") o.device.device_watchdog_ms = std::atof(v.c_str());
+    else if (a == "--device-watchdog-ms") o.device.watchdogs.device_watchdog_ms = std::atof(v.c_str());
     else fail("unknown option " + a);
   }
   if (o.device.transport.kind == config::TransportKind::socketcan && !o.device.transport.can_fd) g_sequence_modulus = 256;
