@@ -202,9 +202,6 @@ void CpuSolver::step(double dt) {
 
 void CpuSolver::check_finite() const { check_finite_state(m_, time_s_); }
 
-ComputeDevice CpuSolver::device() const {
-  const int n = threads();
-  return {std::to_string(n) + (n == 1 ? " CPU thread" : " CPU threads"), "host", ""};
-}
+ComputeDevice CpuSolver::device() const { return cpu_threads_device(threads()); }
 
 }  // namespace hapfluid::sim

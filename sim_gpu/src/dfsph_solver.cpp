@@ -346,9 +346,6 @@ void DfsphSolver::sync_and_check_finite() {
   check_finite_state(m_, time_s_);
 }
 
-ComputeDevice DfsphSolver::device() const {
-  const int n = threads();
-  return {std::to_string(n) + (n == 1 ? " CPU thread" : " CPU threads"), "host", ""};
-}
+ComputeDevice DfsphSolver::device() const { return cpu_threads_device(threads()); }
 
 }  // namespace hapfluid::sim

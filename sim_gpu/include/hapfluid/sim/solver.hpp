@@ -42,6 +42,11 @@ struct ComputeDevice {
   std::string driver;  // "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"; empty for the cpu backend
 };
 
+// The device of a CPU backend: its worker threads.
+inline ComputeDevice cpu_threads_device(int threads) {
+  return {std::to_string(threads) + (threads == 1 ? " CPU thread" : " CPU threads"), "host", ""};
+}
+
 class Solver {
  public:
   virtual ~Solver() = default;
