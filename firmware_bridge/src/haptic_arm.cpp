@@ -65,6 +65,7 @@ bool HapticArm::accept_state_sequence(std::uint16_t seq) {
   hf_seq_accept(&state_seq_, seq, modulus);
   health_.device_restarts++;
   last_echo_ours_ = false;  // its echo starts again too
+  echo_seen_ = echo_moved_ = false;
   return true;
 }
 
@@ -74,7 +75,20 @@ void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_tick
   // commands between never reached the motors: lost on the link, or superseded in one device
   // tick. Only echoes of our own recent commands count (a device still echoing a previous host's,
   // or one just restarted, says nothing about ours).
+  // An echo that has not moved since we started (or since the device restarted) is a previous
+  // host's last command, however close its 8 bits fall to ours: a device keeps it until its
+  // watchdog lets a new host in, and the jump to our first applied command is not a loss.
   constexpr unsigned kRecent = 64;
+  if (!echo_moved_) {
+    const bool first = !echo_seen_;
+    echo_seen_ = true;
+    if (first || echo == last_echo_) {
+      last_echo_ = echo;
+      last_echo_ours_ = false;
+      return;
+    }
+    echo_moved_ = true;
+  }
   const auto newest = static_cast<std::uint8_t>(command_seq_ - 1);
   const bool ours = health_.commands_sent > 0 && static_cast<std::uint8_t>(newest - echo) < kRecent;
   const auto advance = static_cast<std::uint8_t>(echo - last_echo_);
@@ -149,6 +163,7 @@ bool HapticArm::poll(DeviceState& out) {
     state_seq_.started = 0;
     older_run_ = 0;
     last_echo_ours_ = false;
+    echo_seen_ = echo_moved_ = false;
   }
   hf_message m;
   std::uint64_t now = 0;

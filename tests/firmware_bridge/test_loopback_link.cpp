@@ -188,6 +188,31 @@ TEST_P(EveryFraming, CommandsTheDeviceNeverAppliedAreCountedFromItsEcho) {
   EXPECT_EQ(rig.arm->health().commands_lost, 24u);
 }
 
+TEST_P(EveryFraming, AHostTakingOverFromAKilledOneCountsNoLostCommands) {
+  // A host killed mid-run left the device echoing its last command (low byte 250). A new host
+  // counts from 0, so the device takes its commands for late ones until its watchdog lets a new
+  // host in; meanwhile the stale echo 250 looks like one of the new host's recent commands (0 is
+  // 6 ahead of it, modulo 256). When the device then applies the new host's command ~20 ahead,
+  // nothing was lost of the new host's stream that the device could have taken.
+  Rig rig(GetParam(), "takeover");
+  hf_message previous;
+  std::memset(&previous, 0, sizeof previous);
+  previous.type = HF_MSG_COMMAND;
+  for (std::uint16_t seq = 0; seq <= 250; ++seq) {
+    previous.seq = seq;
+    rig.firmware->receive(previous, rig.t);
+  }
+  device::DeviceState state;
+  for (int tick = 0; tick < 200; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_EQ(state.command_echo, static_cast<std::uint8_t>(rig.arm->health().last_command_sequence))
+      << "the device never took up the new host";
+  EXPECT_EQ(rig.arm->health().commands_lost, 0u);
+}
+
 TEST_P(EveryFraming, AFaultedStatusHoldsAtOnceEvenWhenItsFaultMessageIsLost) {
   // Classic CAN carries the fault bits only in FAULT messages; the STATE's status bit 1 says
   // "faulted" in every frame set. When the FAULT message is lost (or still queued), the host

@@ -46,6 +46,8 @@ class HapticArm final : public Device {
   std::uint16_t older_last_ = 0;
   std::uint8_t last_echo_ = 0;
   bool last_echo_ours_ = false;      // last_echo_ names one of our recent commands
+  bool echo_seen_ = false;           // an echo arrived since we started or the device restarted
+  bool echo_moved_ = false;          // ... and it has changed since: it follows our commands
   std::uint32_t reconnects_seen_ = 0;  // transport reconnections already accounted for
   hf_info info_{};
   bool has_info_ = false;
