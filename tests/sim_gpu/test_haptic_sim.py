@@ -2,6 +2,7 @@
 coupling CSV, stats.json), bit-for-bit repeatable runs, and clear failures without outputs
 that look complete."""
 import csv
+import os
 import json
 import subprocess
 import sys
@@ -263,3 +264,32 @@ def test_live_numeric_options_are_strict_too(binary, tmp_path, option, value, re
                              option, value], capture_output=True, text=True, timeout=30)
     assert result.returncode == 2
     assert f"haptic-sim: {option} {value}: {reason}\n" in result.stderr
+
+
+def live_run(binary, scene, out, prefix, duration_s="0.6"):
+    return subprocess.run([str(binary("haptic-sim")), "--live", "--scene", str(scene), "--backend", "cpu", "--threads",
+                           "1", "--duration", duration_s, "--status-every", "0.1", "--shm-prefix", prefix, "--out",
+                           str(out)], capture_output=True, text=True, timeout=60)
+
+
+def test_the_live_runner_reports_the_wall_clamp_as_a_fault(binary, source_dir, tmp_path):
+    # A drop that falls through its floor's pressure (clamping_drop.toml): the live run says so
+    # once, when the clamp first acts, counts it in its status lines and in stats.json, as a
+    # batch run does; a scene whose walls hold says nothing of it and counts 0.
+    result = live_run(binary, source_dir / "tests/sim_gpu/scenes/clamping_drop.toml", tmp_path / "drop",
+                      f"hapfluid-test-clamp-{os.getpid()}")
+    assert result.returncode == 0, result.stderr
+    warnings = [l for l in result.stderr.splitlines() if "last-resort clamp" in l]
+    assert len(warnings) == 1 and warnings[0].startswith("haptic-sim: WARNING "), result.stderr
+    assert any(l.startswith("haptic-sim: t = ") and "wall clamps" in l for l in result.stderr.splitlines()), result.stderr
+    stats = json.loads((tmp_path / "drop" / "stats.json").read_text())
+    assert stats["clamped_particle_events"] > 0 and stats["solver"] == "wcsph"
+    batch = run(binary, source_dir / "tests/sim_gpu/scenes/clamping_drop.toml", tmp_path / "batch", "--export-every", "0")
+    assert batch.returncode == 0, batch.stderr
+    assert json.loads((tmp_path / "batch" / "stats.json").read_text())["clamped_particle_events"] > 0
+
+    calm = live_run(binary, write_scene(tmp_path / "calm"), tmp_path / "calm-out", f"hapfluid-test-calm-{os.getpid()}",
+                    duration_s="0.3")
+    assert calm.returncode == 0, calm.stderr
+    assert "clamp" not in calm.stderr
+    assert json.loads((tmp_path / "calm-out" / "stats.json").read_text())["clamped_particle_events"] == 0
