@@ -18,7 +18,7 @@ ThreadPool::~ThreadPool() {
   for (auto& t : helpers_) t.join();
 }
 
-void ThreadPool::parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t, int)>& fn) {
+void ThreadPool::run(std::size_t count, const Job& fn) {
   if (threads_ == 1) {
     fn(0, count, 0);
     return;
@@ -42,7 +42,7 @@ void ThreadPool::parallel_for(std::size_t count, const std::function<void(std::s
 void ThreadPool::worker_loop(int w) {
   unsigned long seen = 0;
   for (;;) {
-    const std::function<void(std::size_t, std::size_t, int)>* job;
+    const Job* job;
     std::size_t count;
     {
       std::unique_lock lock(mutex_);

@@ -6,8 +6,8 @@
 
 #include <condition_variable>
 #include <cstddef>
-#include <functional>
 #include <mutex>
+#include <type_traits>
 #include <thread>
 #include <vector>
 
@@ -26,8 +26,15 @@ class ThreadPool {
 
   int size() const { return threads_; }
 
-  // Calls fn(begin, end, worker) for each worker's chunk and returns when all are done.
-  void parallel_for(std::size_t count, const std::function<void(std::size_t, std::size_t, int)>& fn);
+  // Calls fn(begin, end, worker) for each worker's chunk and returns when all are done. `fn` is
+  // called through a plain reference (no std::function), so a step allocates nothing however
+  // much its lambdas capture.
+  template <class Fn>
+  void parallel_for(std::size_t count, Fn&& fn) {
+    using F = std::remove_reference_t<Fn>;
+    run(count, Job{const_cast<void*>(static_cast<const void*>(&fn)),
+                   [](void* f, std::size_t b, std::size_t e, int w) { (*static_cast<F*>(f))(b, e, w); }});
+  }
 
   // The chunk worker `w` of `threads` gets for `count` items: the same split parallel_for uses.
   static void chunk(std::size_t count, int threads, int w, std::size_t& begin, std::size_t& end) {
@@ -36,13 +43,19 @@ class ThreadPool {
   }
 
  private:
+  struct Job {
+    void* fn;
+    void (*call)(void* fn, std::size_t begin, std::size_t end, int worker);
+    void operator()(std::size_t begin, std::size_t end, int worker) const { call(fn, begin, end, worker); }
+  };
+  void run(std::size_t count, const Job& job);
   void worker_loop(int w);
 
   int threads_;
   std::vector<std::thread> helpers_;
   std::mutex mutex_;
   std::condition_variable start_cv_, done_cv_;
-  const std::function<void(std::size_t, std::size_t, int)>* job_ = nullptr;
+  const Job* job_ = nullptr;
   std::size_t count_ = 0;
   unsigned long generation_ = 0;
   int pending_ = 0;
