@@ -253,6 +253,55 @@ cfl = 0.2
   std::filesystem::remove_all(dir);
 }
 
+TEST(RigidBody, SphereOfHalfWaterDensityFloatsHalfSubmergedInDfsphWater) {
+  // The same Archimedes check on the incompressible solver at water's viscosity: the ball is
+  // coupled two-way through the solves' stiffness (Akinci 2012), the walls are the volume map.
+  const double r = 0.04;
+  const auto dir = test::temp_dir("float_dfsph");
+  const auto scene = test::write_scene(dir, "name = \"float_dfsph\"\n" + domain(0, 0, 0, 0.15, 0.15, 0.2) + R"(
+[fluid]
+solver = "dfsph"
+particle_spacing_m = 0.0125
+viscosity_pa_s = 0.001
+[[fluid.blocks]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.15, 0.15, 0.1]
+[[bodies]]
+name = "ball"
+mesh = "ball.obj"
+position_m = [0.075, 0.075, 0.12]
+density_kg_m3 = 500.0
+viscosity_pa_s = 0.001
+[time]
+cfl = 0.4
+max_dt_s = 0.005
+)", {{"ball.obj", test::sphere_mesh(r, 2)}});
+  const auto solver_ptr = make_cpu_solver(build_model(scene), 2);
+  Solver& solver = *solver_ptr;
+  solver.advance(1.2);
+  double centre = 0, fastest = 0;
+  const int samples = 10;
+  for (int k = 0; k < samples; ++k) {
+    solver.advance(0.02);
+    centre += solver.model().bodies[0].position.z / samples;
+    fastest = std::max(fastest, std::abs(solver.model().bodies[0].linear_velocity.z));
+  }
+  const auto& f = solver.model().fluid;
+  double top = 0;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const double dx = f.x[i] - 0.075, dy = f.y[i] - 0.075;
+    if (std::sqrt(dx * dx + dy * dy) > 0.06) top = std::max(top, static_cast<double>(f.z[i]));
+  }
+  const double surface = top + 0.5 * 0.0125;
+  const double fraction = submerged_fraction(r, centre - surface);
+  std::cout << "floating sphere (dfsph): centre " << centre << " m, surface " << surface << " m, submerged fraction "
+            << fraction << ", fastest " << fastest << " m/s, clamps " << solver.clamped_particle_count() << "\n";
+  EXPECT_NEAR(fraction, 0.5, 0.15);
+  EXPECT_LT(fastest, 0.1);
+  EXPECT_EQ(solver.clamped_particle_count(), 0u);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(RigidBody, StaticCupHoldsFluid) {
   // A concave container (the bowl/glass of §6.4) keeps the fluid poured into it: no particle
   // leaves the cavity through the walls or the bottom.
