@@ -50,6 +50,7 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
     << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"
     << "  \"solver_iterations\": {\"density_per_step\": " << num(steps > 0 ? it.density_iterations / steps : 0)
     << ", \"divergence_per_step\": " << num(steps > 0 ? it.divergence_iterations / steps : 0)
+    << ", \"viscosity_per_step\": " << num(steps > 0 ? it.viscosity_iterations / steps : 0)
     << ", \"unconverged_solves\": " << it.unconverged_solves
     << ", \"max_mean_density_error\": " << num(it.max_density_error) << "},\n"
     << "  \"phase_ms_per_step\": {\"neighbour_search\": " << per_step_ms(t.neighbour_search_s)

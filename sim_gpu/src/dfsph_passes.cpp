@@ -77,7 +77,9 @@ void PairLists::reserve(std::size_t n) {
 
 void DfsphFields::resize(std::size_t n) {
   for (auto* v : {&density_hat, &factor, &solid_gx, &solid_gy, &solid_gz, &solid_flux, &stiffness_step,
-                  &density_stiffness, &divergence_stiffness})
+                  &density_stiffness, &divergence_stiffness, &visc_bx, &visc_by, &visc_bz, &visc_inv_diag_x,
+                  &visc_inv_diag_y, &visc_inv_diag_z, &cg_rx, &cg_ry, &cg_rz, &cg_px, &cg_py, &cg_pz, &cg_ax, &cg_ay,
+                  &cg_az})
     v->assign(n, 0.0f);
   neighbours.assign(n, 0);
 }
@@ -176,63 +178,33 @@ void apply_stiffness(FluidParticles& f, const DfsphFields& d, const PairLists& l
   }
 }
 
-namespace {
-
-// Viscous acceleration from solid neighbours (no density of their own): nu_ib the mean of the
-// fluid's and the solid's kinematic viscosity.
-inline void solid_viscosity(const SortedSolids& s, const std::uint32_t* list, const float* gx, const float* gy,
-                            const float* gz, std::uint32_t n, float xi, float yi, float zi, float vxi, float vyi, float vzi,
-                            float mui, float inv_rho0, float eps2, float& ax, float& ay, float& az) {
-  for (std::uint32_t q = 0; q < n; ++q) {
-    const std::uint32_t j = list[q];
-    const float dx = xi - s.x[j], dy = yi - s.y[j], dz = zi - s.z[j];
-    const float pi = ((vxi - s.vx[j]) * dx + (vyi - s.vy[j]) * dy + (vzi - s.vz[j]) * dz) / (dx * dx + dy * dy + dz * dz + eps2);
-    const float c = kLaplacianFactor * 0.5f * (mui + s.viscosity[j]) * inv_rho0 * pi;
-    ax += c * gx[q], ay += c * gy[q], az += c * gz[q];
-  }
-}
-
-}  // namespace
-
 HAPFLUID_CLONES
-void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, const SortedSolids& st,
-                                const SortedSolids& bv, const DfsphFields& d, const PairLists& lists,
-                                const PairRange* ranges, std::size_t begin, std::size_t end, float dt) {
-  const float inv_rho0 = 1.0f / p.rest_density_kg_m3;
-  const float eps2 = 0.01f * p.incompressible.kernel.h2;
+void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, const DfsphFields& d,
+                                const PairLists& lists, const PairRange* ranges, std::size_t begin, std::size_t end,
+                                float dt) {
   const float xsph = p.incompressible.xsph_fraction / dt;
   const float gx0 = static_cast<float>(p.gravity_m_s2.x), gy0 = static_cast<float>(p.gravity_m_s2.y),
               gz0 = static_cast<float>(p.gravity_m_s2.z);
-  const float *x = f.x.data(), *y = f.y.data(), *z = f.z.data();
-  const float *vx = f.vx.data(), *vy = f.vy.data(), *vz = f.vz.data(), *mu = f.viscosity.data();
+  const float *vx = f.vx.data(), *vy = f.vy.data(), *vz = f.vz.data();
   const float* rho = d.density_hat.data();
   const std::uint32_t* list = lists.index.data();
-  const float *gx = lists.gx.data(), *gy = lists.gy.data(), *gz = lists.gz.data(), *w = lists.w.data();
+  const float* w = lists.w.data();
   for (std::size_t i = begin; i < end; ++i) {
     const PairRange& r = ranges[i];
-    const float xi = x[i], yi = y[i], zi = z[i], vxi = vx[i], vyi = vy[i], vzi = vz[i], mui = mu[i];
-    float ax = 0, ay = 0, az = 0, sx = 0, sy = 0, sz = 0;
+    const float vxi = vx[i], vyi = vy[i], vzi = vz[i];
+    float sx = 0, sy = 0, sz = 0;
     const std::uint32_t o = r.offset, n = r.fluid;
-#pragma omp simd reduction(+ : ax, ay, az, sx, sy, sz)
-    for (std::uint32_t q = o; q < o + n; ++q) {
-      const std::uint32_t j = list[q];
-      const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-      const float dvx = vxi - vx[j], dvy = vyi - vy[j], dvz = vzi - vz[j];
-      const float inv_rho_j = 1.0f / rho[j];
-      const float pi = (dvx * dx + dvy * dy + dvz * dz) / (dx * dx + dy * dy + dz * dz + eps2);
-      const float c = kLaplacianFactor * 0.5f * (mui + mu[j]) * inv_rho0 * inv_rho_j * pi;
-      ax += c * gx[q], ay += c * gy[q], az += c * gz[q];
-      const float ws = w[q] * inv_rho_j;
-      sx -= ws * dvx, sy -= ws * dvy, sz -= ws * dvz;
+    if (xsph > 0) {
+#pragma omp simd reduction(+ : sx, sy, sz)
+      for (std::uint32_t q = o; q < o + n; ++q) {
+        const std::uint32_t j = list[q];
+        const float ws = w[q] / rho[j];
+        sx -= ws * (vxi - vx[j]), sy -= ws * (vyi - vy[j]), sz -= ws * (vzi - vz[j]);
+      }
     }
-    solid_viscosity(st, list + o + n, gx + o + n, gy + o + n, gz + o + n, r.statics, xi, yi, zi, vxi, vyi, vzi, mui, inv_rho0,
-                    eps2, ax, ay, az);
-    const std::uint32_t ob = o + n + r.statics;
-    solid_viscosity(bv, list + ob, gx + ob, gy + ob, gz + ob, r.bodies, xi, yi, zi, vxi, vyi, vzi, mui, inv_rho0, eps2, ax,
-                    ay, az);
-    f.ax[i] = gx0 + ax + xsph * sx;
-    f.ay[i] = gy0 + ay + xsph * sy;
-    f.az[i] = gz0 + az + xsph * sz;
+    f.ax[i] = gx0 + xsph * sx;
+    f.ay[i] = gy0 + xsph * sy;
+    f.az[i] = gz0 + xsph * sz;
   }
 }
 

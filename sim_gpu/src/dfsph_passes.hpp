@@ -28,14 +28,15 @@ void density_rate(const FluidParticles& f, const DfsphFields& d, const PairLists
 void apply_stiffness(FluidParticles& f, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
                      std::size_t begin, std::size_t end, float dt);
 
-// Gravity, viscosity with fluid and solids, and XSPH (as an acceleration over dt) into ax, ay, az.
-void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, const SortedSolids& statics,
-                                const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists,
-                                const PairRange* ranges, std::size_t begin, std::size_t end, float dt);
+// Gravity and XSPH (as an acceleration over dt) into ax, ay, az; viscosity is implicit
+// (implicit_viscosity.hpp).
+void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, const DfsphFields& d,
+                                const PairLists& lists, const PairRange* ranges, std::size_t begin, std::size_t end,
+                                float dt);
 
 // Force of the fluid on the dynamic body particles [begin, end) (fx, fy, fz): the opposite of the
 // terms each fluid neighbour received from them. The viscous part is written with the velocities
-// the fluid's viscosity pass saw (right after it); the pressure part, this step's total
+// the viscosity solve ended on (right after it); the pressure part, this step's total
 // stiffness of both solves, is added after the solves.
 enum class BodyForcePart { viscous, pressure };
 void body_fluid_forces(const SimulationParams& p, const FluidParticles& f, const std::uint32_t* fluid_cell_start,

@@ -9,6 +9,7 @@
 #include "body_contacts.hpp"
 #include "body_step.hpp"
 #include "dfsph_passes.hpp"
+#include "implicit_viscosity.hpp"
 #include "hapfluid/sim/finite_state.hpp"
 
 namespace hapfluid::sim {
@@ -25,6 +26,10 @@ constexpr float kWarmStartFraction = 0.5f;
 // step. Zeroing it instead (a quasi-static relaxation) leaves the column pressed down by one
 // step of gravity and it springs back when released, by 1.8 mm in a 20 cm tank.
 constexpr float kSettleVelocityKept = 0.8f;
+
+// The viscosity solve ends once the residual is this fraction of the right-hand side's norm (the
+// velocities: 0.1 % of a 1 m/s flow is 1 mm/s).
+constexpr double kViscosityTolerance = 1e-3;
 
 }  // namespace
 
@@ -48,6 +53,7 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads) : m_(std::move(mode
   ranges_.resize(m_.fluid.size());
   fields_.resize(m_.fluid.size());
   worker_error_.assign(threads, 0);
+  worker_dots_.assign(2 * threads, 0);
   worker_clamped_.assign(threads, 0);
   worker_touching_.assign(threads, 0);
   detail::set_body_particle_velocities(m_);
@@ -120,11 +126,6 @@ double DfsphSolver::stable_time_step() const {
   for (std::size_t i = 0; i < bp.size(); ++i) v2 = std::max(v2, bp.vx[i] * bp.vx[i] + bp.vy[i] * bp.vy[i] + bp.vz[i] * bp.vz[i]);
   double dt = p.max_dt_s;
   if (v2 > 0) dt = std::min(dt, p.cfl * p.particle_spacing_m / std::sqrt(static_cast<double>(v2)));
-  // Explicit viscosity: the diffusion limit dt <= h^2 / (8 nu).
-  double mu_max = p.fluid_viscosity_pa_s;
-  for (const RigidBody& b : m_.bodies) mu_max = std::max(mu_max, b.viscosity_pa_s);
-  const double h = p.incompressible.kernel.h;
-  if (mu_max > 0) dt = std::min(dt, 0.125 * h * h * p.rest_density_kg_m3 / mu_max);
   // Contacts are springs of the contact stiffness (body_contacts.hpp): while a body touches
   // another solid the step resolves them like a speed of sound.
   if (bodies_touching_) dt = std::min(dt, 0.4 * p.kernel.h / p.speed_of_sound_m_s);
@@ -239,22 +240,109 @@ void DfsphSolver::density_solve(float dt) {
 void DfsphSolver::non_pressure_forces(float dt) {
   FluidParticles& f = m_.fluid;
   pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int w) {
-    detail::non_pressure_accelerations(m_.params, f, fluid_statics_, body_view_, fields_, lists_[w], ranges_.data(), b, e,
-                                       dt);
-  });
-  // The bodies' share of the viscous pair terms, from the velocities the fluid's pass just used.
-  if (m_.body_particles.size() > 0)
-    pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) {
-      detail::body_fluid_forces(m_.params, f, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::viscous,
-                                m_.body_particles, b, e);
-    });
-  pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int) {
+    detail::non_pressure_accelerations(m_.params, f, fields_, lists_[w], ranges_.data(), b, e, dt);
     for (std::size_t i = b; i < e; ++i) {
       f.vx[i] += dt * f.ax[i];
       f.vy[i] += dt * f.ay[i];
       f.vz[i] += dt * f.az[i];
     }
   });
+  iterations_.viscosity_iterations += static_cast<std::uint64_t>(viscosity_solve(dt));
+  // The bodies' share of the viscous pair terms, from the velocities the solve ended on.
+  if (m_.body_particles.size() > 0)
+    pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) {
+      detail::body_fluid_forces(m_.params, f, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::viscous,
+                                m_.body_particles, b, e);
+    });
+}
+
+// Preconditioned conjugate gradients (Jacobi) on K v = b, started from the velocities after
+// gravity and XSPH; the fluid's velocity arrays are the iterate.
+int DfsphSolver::viscosity_solve(float dt) {
+  FluidParticles& f = m_.fluid;
+  const std::size_t n = f.size();
+  if (n == 0) return 0;
+  bool any = m_.params.fluid_viscosity_pa_s > 0;
+  for (const RigidBody& b : m_.bodies) any = any || b.viscosity_pa_s > 0;
+  if (!any) return 0;
+  detail::DfsphFields& d = fields_;
+  auto reduce = [&](int k) {
+    double s = 0;
+    for (int w = 0; w < pool_.size(); ++w) s += worker_dots_[2 * w + k];
+    return s;
+  };
+  auto apply = [&](const float* x, const float* y, const float* z, float* ox, float* oy, float* oz, std::size_t b,
+                   std::size_t e, int w) {
+    detail::viscosity_apply(m_.params, f, fluid_statics_, body_view_, d, lists_[w], ranges_.data(), b, e, dt, x, y, z,
+                            ox, oy, oz);
+  };
+  // r = b - K v, p = M^-1 r; dots: r . p and b . b.
+  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+    detail::viscosity_rhs(m_.params, f, fluid_statics_, body_view_, lists_[w], ranges_.data(), b, e, dt, d);
+    apply(f.vx.data(), f.vy.data(), f.vz.data(), d.cg_ax.data(), d.cg_ay.data(), d.cg_az.data(), b, e, w);
+    double rz = 0, bb = 0;
+    for (std::size_t i = b; i < e; ++i) {
+      d.cg_rx[i] = d.visc_bx[i] - d.cg_ax[i], d.cg_ry[i] = d.visc_by[i] - d.cg_ay[i], d.cg_rz[i] = d.visc_bz[i] - d.cg_az[i];
+      d.cg_px[i] = d.visc_inv_diag_x[i] * d.cg_rx[i], d.cg_py[i] = d.visc_inv_diag_y[i] * d.cg_ry[i],
+      d.cg_pz[i] = d.visc_inv_diag_z[i] * d.cg_rz[i];
+      rz += d.cg_rx[i] * d.cg_px[i] + d.cg_ry[i] * d.cg_py[i] + d.cg_rz[i] * d.cg_pz[i];
+      bb += d.visc_bx[i] * d.visc_bx[i] + d.visc_by[i] * d.visc_by[i] + d.visc_bz[i] * d.visc_bz[i];
+    }
+    worker_dots_[2 * w] = rz, worker_dots_[2 * w + 1] = bb;
+  });
+  double rz = reduce(0);
+  const double limit = kViscosityTolerance * kViscosityTolerance * reduce(1);
+  const int max_iterations = m_.params.incompressible.max_iterations;
+  int it = 0;
+  double rr = 0;
+  for (; it < max_iterations; ++it) {
+    // Ap and p . Ap
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+      apply(d.cg_px.data(), d.cg_py.data(), d.cg_pz.data(), d.cg_ax.data(), d.cg_ay.data(), d.cg_az.data(), b, e, w);
+      double pap = 0;
+      for (std::size_t i = b; i < e; ++i)
+        pap += d.cg_px[i] * d.cg_ax[i] + d.cg_py[i] * d.cg_ay[i] + d.cg_pz[i] * d.cg_az[i];
+      worker_dots_[2 * w] = pap;
+    });
+    const double pap = reduce(0);
+    if (!(pap > 0)) break;  // converged to round-off (or p = 0)
+    const float alpha = static_cast<float>(rz / pap);
+    // v += alpha p, r -= alpha Ap, and |r|^2
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+      double s = 0;
+      for (std::size_t i = b; i < e; ++i) {
+        f.vx[i] += alpha * d.cg_px[i], f.vy[i] += alpha * d.cg_py[i], f.vz[i] += alpha * d.cg_pz[i];
+        d.cg_rx[i] -= alpha * d.cg_ax[i], d.cg_ry[i] -= alpha * d.cg_ay[i], d.cg_rz[i] -= alpha * d.cg_az[i];
+        s += d.cg_rx[i] * d.cg_rx[i] + d.cg_ry[i] * d.cg_ry[i] + d.cg_rz[i] * d.cg_rz[i];
+      }
+      worker_dots_[2 * w] = s;
+    });
+    rr = reduce(0);
+    if (rr <= limit) {
+      ++it;
+      break;
+    }
+    // z = M^-1 r (into Ap, no longer needed), r . z, then p = z + beta p
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+      double s = 0;
+      for (std::size_t i = b; i < e; ++i) {
+        d.cg_ax[i] = d.visc_inv_diag_x[i] * d.cg_rx[i], d.cg_ay[i] = d.visc_inv_diag_y[i] * d.cg_ry[i],
+        d.cg_az[i] = d.visc_inv_diag_z[i] * d.cg_rz[i];
+        s += d.cg_rx[i] * d.cg_ax[i] + d.cg_ry[i] * d.cg_ay[i] + d.cg_rz[i] * d.cg_az[i];
+      }
+      worker_dots_[2 * w] = s;
+    });
+    const double rz_new = reduce(0);
+    const float beta = static_cast<float>(rz_new / rz);
+    rz = rz_new;
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
+      for (std::size_t i = b; i < e; ++i)
+        d.cg_px[i] = d.cg_ax[i] + beta * d.cg_px[i], d.cg_py[i] = d.cg_ay[i] + beta * d.cg_py[i],
+        d.cg_pz[i] = d.cg_az[i] + beta * d.cg_pz[i];
+    });
+  }
+  if (it >= max_iterations && rr > limit) ++iterations_.unconverged_solves;
+  return it;
 }
 
 void DfsphSolver::body_forces_and_step(double dt) {

@@ -8,8 +8,9 @@
 //     1 / (|sum_j V_j grad W_ij|^2 + sum_fluid |V_j grad W_ij|^2) (normalised density rho/rho0);
 //  2. divergence-free solve on the current velocities (D rho / Dt = 0), warm-started with half of
 //     the last step's stiffness;
-//  3. non-pressure accelerations: gravity, viscosity (the SPH Laplacian of Monaghan 2005 with the
-//     fluid's and each body's viscosity, eq. 9's pairing) and the scene's XSPH fraction;
+//  3. non-pressure forces: gravity and the scene's XSPH fraction, then viscosity (the SPH Laplacian
+//     of Monaghan 2005 with the fluid's and each body's viscosity, eq. 9's pairing) solved
+//     implicitly (implicit_viscosity.hpp), so that no viscosity limits the step;
 //  4. constant-density solve on the predicted velocities (rho* = rho0), warm-started likewise;
 //  5. bodies: the pressure and viscous forces the fluid received from each body particle, with
 //     the opposite sign (two-way coupling, Akinci et al. 2012), plus contacts; Algorithm 2;
@@ -58,6 +59,10 @@ struct DfsphFields {
   std::vector<float> solid_flux;         // sum over body particles of Psi_b grad W_ib . v_b, 1/s
   std::vector<float> stiffness_step;     // this iteration's stiffness increment, m^2/s^2
   std::vector<float> density_stiffness, divergence_stiffness;  // this step's totals, m^2/s^2
+  // Implicit viscosity (implicit_viscosity.hpp): right-hand side, inverse diagonal, and the
+  // conjugate-gradient residual, search direction and its image.
+  std::vector<float> visc_bx, visc_by, visc_bz, visc_inv_diag_x, visc_inv_diag_y, visc_inv_diag_z;
+  std::vector<float> cg_rx, cg_ry, cg_rz, cg_px, cg_py, cg_pz, cg_ax, cg_ay, cg_az;
   std::vector<std::uint16_t> neighbours;
   void resize(std::size_t n);
 };
@@ -77,8 +82,8 @@ class DfsphSolver final : public Solver {
   std::uint64_t clamped_particle_count() const override { return clamped_; }
 
   void set_device_state(std::size_t device, const DeviceState& state) override;
-  // cfl * particle spacing / fastest fluid or body particle; the explicit viscosity's diffusion
-  // limit; the contact stiffness while bodies touch other solids; the scene's max_dt_s.
+  // cfl * particle spacing / fastest fluid or body particle; the contact stiffness while bodies
+  // touch other solids; the scene's max_dt_s (the implicit viscosity sets no limit).
   double stable_time_step() const override;
   void step(double dt) override;
 
@@ -93,6 +98,8 @@ class DfsphSolver final : public Solver {
   void sort_and_build_pairs();
   void divergence_solve(float dt);
   void non_pressure_forces(float dt);
+  // The viscosity solve on the velocities after gravity and XSPH; returns CG iterations.
+  int viscosity_solve(float dt);
   void density_solve(float dt);
   void body_forces_and_step(double dt);
   void integrate_positions(float dt);
@@ -114,6 +121,7 @@ class DfsphSolver final : public Solver {
   std::vector<detail::PairRange> ranges_;
   detail::DfsphFields fields_;
   std::vector<double> worker_error_;
+  std::vector<double> worker_dots_;  // 2 per worker
   std::vector<std::uint64_t> worker_clamped_;
   std::vector<char> worker_touching_;
   bool bodies_touching_ = false;
