@@ -5,6 +5,7 @@
 
 #include "hapfluid/sim/cubic_kernel.hpp"
 #include "hapfluid/sim/neighbour_grid.hpp"
+#include "implicit_viscosity.hpp"
 
 namespace hapfluid::sim::detail {
 namespace {
@@ -14,9 +15,6 @@ namespace {
 #else
 #define HAPFLUID_CLONES
 #endif
-
-// 2 (d + 2) of the SPH Laplacian of a velocity field in d = 3 dimensions (Monaghan 2005).
-constexpr float kLaplacianFactor = 10.0f;
 
 // Appends the candidates of the cells around (xi, yi, zi) that lie within h: each run of cells
 // is copied branch-free (the index is always written, the cursor advances only for a neighbour),

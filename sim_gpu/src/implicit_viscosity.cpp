@@ -3,9 +3,6 @@
 namespace hapfluid::sim::detail {
 namespace {
 
-// 2 (d + 2) of the SPH Laplacian of a velocity field in d = 3 dimensions (Monaghan 2005).
-constexpr float kLaplacianFactor = 10.0f;
-
 struct PairTerms {
   float inv_rho0, eps2;
 };

@@ -17,6 +17,10 @@
 
 namespace hapfluid::sim::detail {
 
+// 2 (d + 2) of the SPH Laplacian of a velocity field in d = 3 dimensions (Monaghan 2005); the
+// bodies' share of the viscous terms (dfsph_passes.hpp) must use the same.
+inline constexpr float kLaplacianFactor = 10.0f;
+
 // b = v* - dt sum_solids c (v_b . x) / d grad, and the Jacobi preconditioner (the inverse of the
 // system's diagonal, per component), into the viscosity fields.
 void viscosity_rhs(const SimulationParams& p, const FluidParticles& f, const SortedSolids& statics,
