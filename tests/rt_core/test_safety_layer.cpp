@@ -31,7 +31,8 @@ struct Harness {
   double sim_age_ms = 0;
   explicit Harness(SafetyConfig c = {}) : config(c), layer(config) {}
   SafetyOutput tick(Wrench command, bool fresh_frame = true, bool sim_fresh = true) {
-    now_ns += kTickNs;
+    now_ns += kTickNs + late_ns;
+    late_ns = 0;
     sim_age_ms = sim_fresh ? 0 : sim_age_ms + 1.0;
     SafetyInput in;
     in.now_ns = now_ns;
@@ -54,6 +55,7 @@ struct Harness {
   bool deadman = true;
   bool estop = false;
   bool sim_restarted = false;  // the next fresh sample comes from a new sim
+  std::uint64_t late_ns = 0;   // the next tick wakes this much late (an overrun)
 };
 
 double max_abs_change(const Wrench& a, const Wrench& b) { return norm(a.force_n - b.force_n); }
@@ -196,6 +198,54 @@ TEST(SafetyLayer, LinkLossZeroesAtOnceAndRecoversOnlyAfterAHealthyLinkAndARamp) 
   EXPECT_TRUE(out.flags & flag_waiting_to_engage);
   for (int k = 0; k < 51; ++k) out = h.tick({{0.2, 0, 0}, {}});
   EXPECT_TRUE(out.flags & flag_engaging) << "small for engage_small_ms (50 ms)";
+}
+
+TEST(SafetyLayer, ALoopThatWokeLateLooksForTheFramesSentMeanwhileBeforeBlamingTheLink) {
+  // The loop itself stalled 7 ms (longer than link_timeout_ms): its first tick after the stall
+  // finds no frame yet, the next one finds the device's frames. That is an overrun of the loop,
+  // not a silent device, and the hand keeps its wrench.
+  Harness h;
+  SafetyOutput out = h.settle({{3, 0, 0}, {}});
+  ASSERT_NEAR(out.wrench.force_n.x, 3.0, 1e-9);
+  for (int stall = 0; stall < 20; ++stall) {
+    h.late_ns = 7 * kTickNs;
+    out = h.tick({{3, 0, 0}, {}}, /*fresh_frame=*/false);
+    EXPECT_FALSE(out.faults & fault_link_timeout) << "stall " << stall;
+    out = h.tick({{3, 0, 0}, {}});
+    EXPECT_FALSE(out.faults) << "stall " << stall;
+    EXPECT_NEAR(out.wrench.force_n.x, 3.0, 1e-9) << "stall " << stall;
+    for (int k = 0; k < 10; ++k) h.tick({{3, 0, 0}, {}});
+  }
+  // A device that really fell silent during the stall: a fault once the loop has looked for
+  // link_timeout_ms worth of its own ticks.
+  h.late_ns = 7 * kTickNs;
+  out = h.tick({{3, 0, 0}, {}}, false);
+  int fault_tick = -1;
+  for (int k = 0; k < 10 && fault_tick < 0; ++k) {
+    out = h.tick({{3, 0, 0}, {}}, false);
+    if (out.faults & fault_link_timeout) fault_tick = k;
+  }
+  EXPECT_GE(fault_tick, 0);
+  EXPECT_LE(fault_tick, 5);
+  EXPECT_EQ(out.wrench, Wrench{});
+}
+
+TEST(SafetyLayer, ALoopThatLooksTooSeldomFaultsTheLinkOnceTheDevicesOwnWatchdogHasTripped) {
+  // Ticks 8 ms apart on a dead link: never 5 looks in a row within link_timeout_ms, but once
+  // device_watchdog_ms (20 ms) has passed the device has zeroed its motors: the host says so too.
+  Harness h;
+  h.settle({{3, 0, 0}, {}});
+  SafetyOutput out;
+  double silent_ms = 0;
+  while (!(out.faults & fault_link_timeout) && silent_ms < 100) {
+    h.late_ns = 7 * kTickNs;
+    out = h.tick({{3, 0, 0}, {}}, false);
+    silent_ms += 8;
+  }
+  EXPECT_TRUE(out.faults & fault_link_timeout);
+  EXPECT_GT(silent_ms, h.config.device_watchdog_ms);
+  EXPECT_LE(silent_ms, h.config.device_watchdog_ms + 8);
+  EXPECT_EQ(out.wrench, Wrench{});
 }
 
 TEST(SafetyLayer, InvalidDeviceStateIsALinkFault) {

@@ -20,6 +20,7 @@ SafetyConfig make_safety_config(const config::RigDevice& d, std::int64_t period_
   c.sim_stale_ms = w.sim_stale_ms;
   c.sim_ramp_down_ms = w.sim_ramp_down_ms;
   c.link_timeout_ms = w.link_timeout_ms;
+  c.device_watchdog_ms = w.device_watchdog_ms;
   c.engage_threshold_n = w.engage_threshold_n;
   c.engage_ramp_ms = w.engage_ramp_ms;
   c.require_deadman = d.require_deadman;
@@ -53,7 +54,7 @@ std::string describe(const SafetyConfig& c) {
       "  max_force_n = %g (rig)\n  max_torque_nm = %g (rig)\n"
       "  max_force_axis_n = [%g, %g, %g] (rig)\n  max_torque_axis_nm = [%g, %g, %g] (rig)\n"
       "  max_force_rate_n_per_s = %g (rig)\n  max_torque_rate_nm_per_s = %g (rig)\n"
-      "  sim_stale_ms = %g, sim_ramp_down_ms = %g (rig)\n  link_timeout_ms = %g (rig)\n"
+      "  sim_stale_ms = %g, sim_ramp_down_ms = %g (rig)\n  link_timeout_ms = %g, device_watchdog_ms = %g (rig)\n"
       "  engage_threshold_n = %g, engage_ramp_ms = %g (rig)\n  require_deadman = %s (rig)\n"
       "  engage_threshold_nm = %g (rig, or engage_threshold_n * max_torque_nm / max_force_n)\n"
       "  link_recover_ms = %g (rig)\n"
@@ -64,7 +65,7 @@ std::string describe(const SafetyConfig& c) {
       "  passivity: %s, max damping %g N*s/m and %g N*m*s/rad, energy cap %g J (rig)\n",
       c.max_force_n, c.max_torque_nm, c.max_force_axis_n.x, c.max_force_axis_n.y, c.max_force_axis_n.z,
       c.max_torque_axis_nm.x, c.max_torque_axis_nm.y, c.max_torque_axis_nm.z, c.max_force_rate_n_per_s,
-      c.max_torque_rate_nm_per_s, c.sim_stale_ms, c.sim_ramp_down_ms, c.link_timeout_ms, c.engage_threshold_n,
+      c.max_torque_rate_nm_per_s, c.sim_stale_ms, c.sim_ramp_down_ms, c.link_timeout_ms, c.device_watchdog_ms, c.engage_threshold_n,
       c.engage_ramp_ms, c.require_deadman ? "true" : "false", c.engage_threshold_nm, c.link_recover_ms,
       c.max_lost_commands, c.lost_command_window_ms,
       c.engage_small_ms, c.engage_hold_ms, c.engage_steady_band_n, c.engage_steady_band_nm, c.engage_ramp_rate_n_per_s,

@@ -1,6 +1,7 @@
 #include "hapfluid/safety/safety_layer.hpp"
 
 #include <algorithm>
+#include <cstdint>
 
 namespace hapfluid::safety {
 namespace {
@@ -11,8 +12,18 @@ void SafetyLayer::update_link(const SafetyInput& in) {
   if (in.fresh_frame && in.state_valid) {
     last_fresh_ns_ = in.now_ns;
     seen_frame_ = true;
+    looks_without_frame_ = 0;
+  } else if (looks_without_frame_ < UINT32_MAX) {
+    ++looks_without_frame_;
   }
-  bool timed_out = !seen_frame_ || double(in.now_ns - last_fresh_ns_) > config_.link_timeout_ms * kNsPerMs;
+  // Silence counts only while the loop was there to hear it: a loop that itself woke late (an
+  // overrun, counted as such) first looks for the frames sent meanwhile. Past the device's own
+  // watchdog the device has zeroed its motors, so however seldom the loop looked, the link is down.
+  const double silent_ms = double(in.now_ns - last_fresh_ns_) / kNsPerMs;
+  const double looks_needed = config_.link_timeout_ms / (config_.period_s * 1e3);
+  bool timed_out = !seen_frame_ ||
+                   (silent_ms > config_.link_timeout_ms && double(looks_without_frame_) > looks_needed) ||
+                   silent_ms > std::max(config_.link_timeout_ms, config_.device_watchdog_ms);
   bool healthy_now = !timed_out && in.state_valid && !in.device_fault;
   if (healthy_now && !healthy_) healthy_since_ns_ = in.now_ns;
   healthy_ = healthy_now;

@@ -22,6 +22,7 @@ struct SafetyConfig {
   double sim_stale_ms = 50.0;
   double sim_ramp_down_ms = 100.0;
   double link_timeout_ms = 5.0;
+  double device_watchdog_ms = 20.0;  // the device zeroes its motors after this long without commands
   double engage_threshold_n = 1.0;
   double engage_ramp_ms = 200.0;
   bool require_deadman = false;

@@ -110,6 +110,7 @@ class SafetyLayer {
   bool seen_frame_ = false;
   double lost_bucket_ = 0;         // lost commands, draining max_lost_commands per window
   std::uint64_t last_fresh_ns_ = 0;
+  std::uint32_t looks_without_frame_ = 0;  // ticks since the last fresh frame
   std::uint64_t last_now_ns_ = 0;
   std::uint64_t healthy_since_ns_ = 0;
   bool healthy_ = false;
