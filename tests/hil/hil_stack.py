@@ -29,7 +29,7 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "scripts"))
-from hapfluid import device_scene, load_toml, private_rig_text  # noqa: E402  (shared with the launcher)
+from hapfluid import cpu_placement, device_scene, load_toml, private_rig_text  # noqa: E402  (shared with the launcher)
 
 LEAD_IN_S = 1.5  # scripted hands hold still this long (the loop engages, the fluid settles)
 SCENES = ROOT / "config" / "scenes"
@@ -63,11 +63,17 @@ WAIT_TIMEOUT_S = 40.0
 SIM_STATUS_EVERY_S = 0.2  # the sim's status lines (simulated time, samples) the waits read
 
 
-def _try_nice(increment):
-    try:
-        os.nice(increment)
-    except PermissionError:
-        pass
+def _placed(nice, cpus):
+    """A child's set-up before exec: its nice value and CPUs (empty: inherited)."""
+    def preexec():
+        if nice:
+            try:
+                os.nice(nice)
+            except PermissionError:
+                pass
+        if cpus:
+            os.sched_setaffinity(0, cpus)
+    return preexec
 
 
 def _fifo_prefix() -> list[str]:
@@ -283,6 +289,14 @@ class Stack:
         self.sockets = re.findall(r'address = "(/tmp/hapfluid-[^"]+\.sock)"', text)
         self.rig = tmp_path / "rig.toml"
         self.rig.write_text(text)
+        # As on a rig (the systemd units) and in `make run`: the loop alone on its CPU with the
+        # emulated devices beside it (they stand in for hardware outside the host), everything
+        # else off it: this harness too. On a kernel without full preemption a process in a long
+        # system call holds its CPU, so a sim beside the loop delays the loop and the device.
+        self.device_cpus, self.service_cpus = cpu_placement(load_toml(self.rig)["rt"])
+        self.own_cpus = os.sched_getaffinity(0)
+        if self.service_cpus:
+            os.sched_setaffinity(0, self.service_cpus)
         self.procs = {}
         self.started_at = {}
 
@@ -309,11 +323,12 @@ class Stack:
         return path
 
     # ---- processes -------------------------------------------------------------------------
-    def _start(self, name, args, stdout=None, nice=0):
+    def _start(self, name, args, stdout=None, nice=0, cpus=None):
+        """cpus: where the process runs (None: off the loop's CPU, as every non-real-time part)."""
         log = open(self.dir / f"{name}.log", "a")
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True,
-                             preexec_fn=(lambda: _try_nice(nice)) if nice else None)
+                             preexec_fn=_placed(nice, self.service_cpus if cpus is None else cpus))
         self.procs[name] = p
         return p
 
@@ -328,7 +343,7 @@ class Stack:
         # real-time priority (below haptic-rt's 80) so a loaded CI machine does not fake link faults.
         p = self._start(name, [*FIFO, self.binary("haptic-fake-device"), "--rig", self.rig, "--device", device, "--motion",
                                motion, "--log", self.dir / f"{name}.csv", "--summary", self.dir / f"{name}.json",
-                               *extra], stdout=subprocess.PIPE)
+                               *extra], stdout=subprocess.PIPE, cpus=self.device_cpus)
         line = p.stdout.readline()
         assert "ready" in line, f"{name} did not start: {line!r} {self.log(name)}"
         return p
@@ -337,7 +352,8 @@ class Stack:
         """Starts haptic-rt and returns once its loop publishes device states and has had 0.5 s to
         take its devices' frames and engage them (at zero wrench when no sim runs yet)."""
         p = self._start(name, [self.binary("haptic-rt"), "--rig", self.rig, "--shm-prefix", self.prefix,
-                               "--trace", self.dir / f"{name}-trace.csv", "--flight-dir", self.dir / "flight", *extra])
+                               "--trace", self.dir / f"{name}-trace.csv", "--flight-dir", self.dir / "flight", *extra],
+                        cpus=self.own_cpus)  # it pins its loop and keeps its helpers off that CPU
         self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.device_states") or p.poll() is not None, 15)
         assert p.poll() is None, f"haptic-rt stopped: {self.log(name)}"
         time.sleep(0.5)
@@ -379,7 +395,8 @@ class Stack:
         return self.stop(name, signal.SIGKILL)
 
     def close(self):
-        """Stops whatever is still running (test failure paths)."""
+        """Stops whatever is still running (test failure paths) and gives this harness its CPUs back."""
+        os.sched_setaffinity(0, self.own_cpus)
         for name, p in self.procs.items():
             if p.poll() is None:
                 p.kill()

