@@ -105,3 +105,25 @@ TEST(VtkReader, RejectsFilesThatAreNotParticleData) {
                 .find("does not match POINTS"),
             std::string::npos);
 }
+
+TEST(VtkReader, CountsTheFileCannotHoldFailBeforeAnythingIsAllocated) {
+  // haptic-render --replay reads any file it is pointed at: a count in a 70-byte file must not
+  // make it allocate for it (2^31 ASCII points were 48 GB of doubles; a binary section of 2^62
+  // values overflowed the size check and was then allocated).
+  auto message = [](const std::string& text) {
+    try {
+      parse_vtk_points(text, "big.vtk");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string ascii = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 2147483648 float\n1 2 3\n";
+  EXPECT_NE(message(ascii).find("big.vtk: line 5: ASCII data ends early: 6442450944 values"), std::string::npos)
+      << message(ascii);
+  std::string binary = "# vtk DataFile Version 3.0\nt\nBINARY\nDATASET POLYDATA\nPOINT_DATA 2147483648\n"
+                       "SCALARS speed double 2147483648\nLOOKUP_TABLE default\n";
+  put_big_endian(binary, 1.0);
+  EXPECT_NE(message(binary).find("binary data ends early: 4611686018427387904 values"), std::string::npos)
+      << message(binary);
+}
