@@ -101,8 +101,9 @@ class Parser {
     throw std::runtime_error(name_ + ": line " + std::to_string(line_number_) + ": " + what);
   }
 
+  // Whitespace as split() sees it: a line of only \v or \f is blank, not a header without a word.
   static std::string trimmed(const std::string& s) {
-    size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+    size_t a = s.find_first_not_of(" \t\r\n\v\f"), b = s.find_last_not_of(" \t\r\n\v\f");
     return a == std::string::npos ? "" : s.substr(a, b - a + 1);
   }
 

@@ -127,3 +127,14 @@ TEST(VtkReader, CountsTheFileCannotHoldFailBeforeAnythingIsAllocated) {
   EXPECT_NE(message(binary).find("binary data ends early: 4611686018427387904 values"), std::string::npos)
       << message(binary);
 }
+
+TEST(VtkReader, ALineOfOtherWhitespaceIsBlank) {
+  // A line of a vertical tab or a form feed has no word: it is skipped like an empty line (it
+  // once reached the section parser as a header without a first word).
+  const std::string file =
+      "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\n\v\nPOINTS 1 float\n0 0 1\n\f \n"
+      "POINT_DATA 1\nSCALARS kind int 1\nLOOKUP_TABLE default\n2\n";
+  VtkPoints v = parse_vtk_points(file, "x.vtk");
+  ASSERT_EQ(v.points_m.size(), 1u);
+  EXPECT_EQ(v.point_scalars["kind"], (std::vector<double>{2}));
+}
