@@ -84,6 +84,9 @@ TriangleMesh load_stl_binary(const std::filesystem::path& file, const std::strin
     for (int c = 0; c < 3; ++c) {
       float xyz[3];
       std::memcpy(xyz, record + 12 * c, 12);
+      // Raw floats may be NaN or infinite, which no text reader lets through.
+      if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2]))
+        fail(file, 0, "binary STL triangle " + std::to_string(t) + " has a vertex that is not 3 finite numbers");
       mesh.vertices_m.push_back({xyz[0], xyz[1], xyz[2]});
     }
     mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
