@@ -17,6 +17,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 
@@ -115,10 +116,12 @@ def run_target(exe, args, out, seeds, env):
         returncode = process.wait()
         reader.join()
     wall_s = time.monotonic() - started
-    # The harnesses remove their shm object and socket on a clean exit; a crash leaves them.
+    # The harnesses remove their shm object, socket and scratch folder on a clean exit; a crash
+    # leaves them behind.
     for leftover in (pathlib.Path(f"/dev/shm/hapfluid-fuzz-{process.pid}.segment"),
                      pathlib.Path(f"/tmp/hapfluid-fuzz-arm-{process.pid}.sock")):
         leftover.unlink(missing_ok=True)
+    shutil.rmtree(pathlib.Path(tempfile.gettempdir()) / f"hapfluid-fuzz-scene-{process.pid}", ignore_errors=True)
     failures = sorted(str(artifacts / p.name) for p in artifacts.iterdir()
                       if p.name not in before and p.name.startswith(FAILURE_PREFIXES))
     status, stats = progress.status, progress.stats
