@@ -49,7 +49,6 @@ class Borrowed final : public device::Transport {
   device::Io send(const device::WireFrame& f) override { return t_.send(f); }
   device::Io receive(device::WireFrame& f) override { return t_.receive(f); }
   int poll_fd() const override { return t_.poll_fd(); }
-  void service() override { t_.service(); }
   std::uint32_t error_flags() const override { return t_.error_flags(); }
   void clear_error_flags() override { t_.clear_error_flags(); }
   std::uint32_t reconnects() const override { return t_.reconnects(); }
