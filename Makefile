@@ -3,11 +3,15 @@
 #   make test     ... and run every test (ctest + pytest), with their summaries
 #   make run      ... and run the main job (SCENE=<name> for another scene)
 #   make bench    ... and run every benchmark, JSON under out/bench/ (installs SPlisHSPlasH for the comparison)
+#   make fuzz     fuzz every reader of untrusted input (clang, libFuzzer, ASan+UBSan in build-fuzz/),
+#                 RUNS executions per target (default 1000000), JSON in out/fuzz/fuzz.json
 #   make hil      ... and run the QEMU hardware-in-the-loop suite (KERNEL=rt: PREEMPT_RT kernel)
 #   make install  install binaries, config and systemd units (PREFIX=/usr/local)
-#   make clean    remove build/ and out/
+#   make clean    remove build/, build-fuzz/ and out/
 SHELL := /bin/bash
 BUILD ?= build
+FUZZ_BUILD ?= build-fuzz
+RUNS ?= 1000000
 BUILD_TYPE ?= RelWithDebInfo
 PREFIX ?= /usr/local
 SCENE ?= spoon_stirring
@@ -17,7 +21,7 @@ PY := $(VENV)/bin/python
 JOBS ?= $(shell nproc)
 KERNEL ?= default
 
-.PHONY: all deps build test test-cpp test-py run bench install clean hil
+.PHONY: all deps build test test-cpp test-py run bench fuzz install clean hil
 
 all: build
 
@@ -40,6 +44,14 @@ bench: build
 	@bash scripts/install-deps.sh bench
 	@$(PY) scripts/run_benchmarks.py --build $(BUILD) --out out/bench
 
+# Its own build folder: clang instruments every library for libFuzzer (CMake option HAPFLUID_FUZZ).
+fuzz: deps
+	@bash scripts/install-deps.sh fuzz
+	@cmake -S . -B $(FUZZ_BUILD) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+	  -DCMAKE_CXX_COMPILER=clang++ -DHAPFLUID_FUZZ=ON >/dev/null
+	@cmake --build $(FUZZ_BUILD) --target fuzzers -j $(JOBS)
+	@$(PY) scripts/run_fuzz.py --build $(FUZZ_BUILD) --out out/fuzz --runs $(RUNS)
+
 install: build
 	@cmake --install $(BUILD) --prefix $(PREFIX)
 
@@ -47,4 +59,4 @@ hil: build
 	@$(PY) tests/hil-kernel/hil.py --build $(BUILD) --kernel $(KERNEL)
 
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) $(FUZZ_BUILD) out

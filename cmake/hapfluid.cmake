@@ -35,9 +35,10 @@ endfunction()
 # ThreadSanitizer variants, built beside the normal targets so that `make test` runs the race
 # checks without a separate build folder (the normal targets get no TSan flag). GCC, the
 # project's compiler: Debian 12's g++ brings libtsan2. Off when the whole build is already
-# sanitized (-DHAPFLUID_SANITIZE=...), as TSan cannot be combined with ASan and would be redundant.
+# sanitized (-DHAPFLUID_SANITIZE=... or the fuzzing build), as TSan cannot be combined with ASan
+# and would be redundant.
 set(HAPFLUID_TSAN_FLAGS -fsanitize=thread -fno-omit-frame-pointer -g -O2)
-if(NOT HAPFLUID_SANITIZE)
+if(NOT HAPFLUID_SANITIZE AND NOT HAPFLUID_FUZZ)
   include(CheckCXXSourceCompiles)
   set(CMAKE_REQUIRED_FLAGS -fsanitize=thread)
   set(CMAKE_REQUIRED_LINK_OPTIONS -fsanitize=thread)

@@ -6,6 +6,7 @@
 #   scripts/install-deps.sh            core: build, test, run
 #   scripts/install-deps.sh hil        core + what the QEMU hardware-in-the-loop suite needs
 #   scripts/install-deps.sh bench      core + SPlisHSPlasH (PyPI wheel), the benchmarks' reference solver
+#   scripts/install-deps.sh fuzz       core + clang with libFuzzer and the symbolizer (make fuzz)
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -18,20 +19,24 @@ debian_core=(
   glslang-tools spirv-tools
   libglfw3-dev libpng-dev libstb-dev libglm-dev xvfb xauth
   libusb-1.0-0-dev libhidapi-dev can-utils libsystemd-dev systemd
-  rt-tests strace clang libclang-rt-14-dev
+  rt-tests strace
   python3-venv
 )
 debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
+# clang-14 (via clang) compiles the fuzzing build, libclang-rt-14-dev holds libFuzzer and the
+# sanitizer runtimes, llvm-14 the llvm-symbolizer that turns sanitizer reports into file:line.
+debian_fuzz=(clang libclang-rt-14-dev llvm-14)
 python_packages=(pytest numpy matplotlib python-can cantools hypothesis)
 # Only bench_splishsplash.py uses it; pinned so that its scene format and log stay what we parse.
 python_bench=(pysplishsplash==2.19.0)
 
 want=("${debian_core[@]}")
 [ "$group" = hil ] && want+=("${debian_hil[@]}")
+[ "$group" = fuzz ] && want+=("${debian_fuzz[@]}")
 case "$group" in
-  core|hil) ;;
+  core|hil|fuzz) ;;
   bench) python_packages+=("${python_bench[@]}") ;;
-  *) echo "install-deps: unknown group '$group' (core, hil or bench)" >&2; exit 2 ;;
+  *) echo "install-deps: unknown group '$group' (core, hil, bench or fuzz)" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -84,6 +84,9 @@ TriangleMesh load_stl_binary(const std::filesystem::path& file, const std::strin
     for (int c = 0; c < 3; ++c) {
       float xyz[3];
       std::memcpy(xyz, record + 12 * c, 12);
+      // Raw floats may be NaN or infinite, which no text reader lets through.
+      if (!std::isfinite(xyz[0]) || !std::isfinite(xyz[1]) || !std::isfinite(xyz[2]))
+        fail(file, 0, "binary STL triangle " + std::to_string(t) + " has a vertex that is not 3 finite numbers");
       mesh.vertices_m.push_back({xyz[0], xyz[1], xyz[2]});
     }
     mesh.triangles.push_back({3 * t, 3 * t + 1, 3 * t + 2});
@@ -113,17 +116,13 @@ void weld(TriangleMesh& mesh) {
 
 }  // namespace
 
-TriangleMesh load_mesh(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) fail(file, 0, "cannot open mesh file (missing or unreadable)");
+TriangleMesh parse_mesh(const std::string& bytes, const std::filesystem::path& file) {
   const std::string ext = lower_extension(file);
   TriangleMesh mesh;
   if (ext == ".obj") {
-    mesh = load_obj(file, in);
+    std::istringstream text(bytes);
+    mesh = load_obj(file, text);
   } else if (ext == ".stl") {
-    std::ostringstream all;
-    all << in.rdbuf();
-    const std::string bytes = all.str();
     bool ascii = bytes.rfind("solid", 0) == 0 && bytes.find("facet") != std::string::npos;
     if (ascii) {
       std::istringstream text(bytes);
@@ -137,6 +136,14 @@ TriangleMesh load_mesh(const std::filesystem::path& file) {
   }
   if (mesh.triangles.empty()) fail(file, 0, "mesh has no triangles");
   return mesh;
+}
+
+TriangleMesh load_mesh(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) fail(file, 0, "cannot open mesh file (missing or unreadable)");
+  std::ostringstream all;
+  all << in.rdbuf();
+  return parse_mesh(all.str(), file);
 }
 
 Aabb mesh_bounds(const TriangleMesh& mesh) { return transformed_bounds(mesh, 1.0, Pose{}); }

@@ -13,6 +13,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <condition_variable>
 #include <cstring>
@@ -24,6 +25,7 @@ namespace hapfluid::fake {
 
 struct FunctionFsTransport::Shared {
   int ep0 = -1, ep_in = -1, ep_out = -1, event_fd = -1;
+  long out_interval_ns = 0;
   std::mutex mutex;
   std::condition_variable tx_ready;
   std::deque<device::WireFrame> rx, tx;
@@ -105,6 +107,10 @@ void reader_loop(std::shared_ptr<FunctionFsTransport::Shared> s) {
       s->errors |= device::kDisconnected;  // ESHUTDOWN: not enabled by the host (yet)
       ::usleep(5000);
     }
+    if (n > 0 && s->out_interval_ns > 0) {  // a slow device; the wake signal ends the nap early
+      timespec nap{s->out_interval_ns / 1'000'000'000, s->out_interval_ns % 1'000'000'000};
+      nanosleep(&nap, nullptr);
+    }
   }
   s->reader_done = true;
 }
@@ -146,9 +152,10 @@ bool stop_thread(std::thread& thread, const std::atomic<bool>& done, int limit_m
 
 }  // namespace
 
-FunctionFsTransport::FunctionFsTransport(const std::string& mount_dir)
+FunctionFsTransport::FunctionFsTransport(const std::string& mount_dir, double out_interval_ms)
     : mount_dir_(mount_dir), shared_(std::make_shared<Shared>()) {
   Shared& s = *shared_;
+  s.out_interval_ns = std::lround(out_interval_ms * 1e6);
   s.ep0 = ::open((mount_dir + "/ep0").c_str(), O_RDWR | O_CLOEXEC);
   if (s.ep0 < 0)
     throw device::TransportError(

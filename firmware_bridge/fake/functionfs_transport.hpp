@@ -19,7 +19,9 @@ namespace hapfluid::fake {
 
 class FunctionFsTransport final : public device::Transport {
  public:
-  explicit FunctionFsTransport(const std::string& mount_dir);
+  // `out_interval_ms` > 0 makes a slow device: it takes one OUT packet every that many
+  // milliseconds, so in between the host's transfers wait for it.
+  FunctionFsTransport(const std::string& mount_dir, double out_interval_ms = 0);
   ~FunctionFsTransport() override;
 
   device::Io send(const device::WireFrame& frame) override;     // queued; dropped when 64 are pending

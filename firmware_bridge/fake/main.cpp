@@ -17,6 +17,7 @@
 #include "fake_firmware.hpp"
 #include "functionfs_transport.hpp"
 #include "hand.hpp"
+#include "hidg_transport.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/hid_descriptors.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -34,8 +35,9 @@ const char* kUsage = R"(usage: haptic-fake-device [options]
   --rig FILE --device NAME     take transport, node, watchdog and limits from a rig file
   --transport loopback|socketcan|hid|usb_bulk   (default loopback)
   --address A                  loopback socket path | CAN interface | hid: VID:PID presented through
-                               /dev/uhid (default 1209:4846, SpaceMouse 256f:c635) | usb_bulk: the
-                               directory where the gadget's FunctionFS instance is mounted
+                               /dev/uhid (default 1209:4846, SpaceMouse 256f:c635), or the /dev/hidgN
+                               node of a USB gadget's hid function | usb_bulk: the directory where
+                               the gadget's FunctionFS instance is mounted
   --framing can|canfd|hid|bulk loopback wire format (socketcan: can or canfd)
   --node N                     CAN node id 1..15 (default 1)
   --kind haptic_arm|spacemouse (default haptic_arm)
@@ -55,6 +57,10 @@ fault injection:
   --stop-answering-after S     stop reading commands after S seconds (still sends state)
   --bus-off-at S [--bus-off-ms MS]   CAN: report bus-off at S, silent for MS (default 200), restart
   --seed N                     random seed for --drop-probability (default 1)
+  --out-interval-ms MS         a slow USB device (gadget hid or usb_bulk): take host->device
+                               transfers only every MS, so the host's writes wait for the device
+  --hid-report-descriptor KIND print the HID report descriptor of KIND (haptic_arm|spacemouse) as
+                               hex, for a gadget's configfs report_desc, and exit
 )";
 
 struct Options {
@@ -66,9 +72,23 @@ struct Options {
   double drop_probability = 0;
   int corrupt_every = 0;
   double delay_ms = 0;
+  double out_interval_ms = 0;
   double silent_after_s = -1, stop_answering_after_s = -1, bus_off_at_s = -1, bus_off_ms = 200;
   unsigned seed = 1;
 };
+
+bool is_gadget_hid(const Options& o) { return o.device.transport.address.rfind("/dev/hidg", 0) == 0; }
+
+[[noreturn]] void print_hid_descriptor(const std::string& kind) {
+  const bool mouse = kind == "spacemouse";
+  if (!mouse && kind != "haptic_arm")
+    throw std::invalid_argument("--hid-report-descriptor " + kind + ": choose haptic_arm or spacemouse");
+  const std::uint8_t* d = mouse ? device::kSpaceMouseHidDescriptor : device::kHapfluidHidDescriptor;
+  const std::size_t n = mouse ? sizeof device::kSpaceMouseHidDescriptor : sizeof device::kHapfluidHidDescriptor;
+  for (std::size_t i = 0; i < n; ++i) std::printf("%02x", d[i]);
+  std::printf("\n");
+  std::exit(0);
+}
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -116,6 +136,8 @@ Options parse(int argc, char** argv) {
     else if (a == "--bus-off-at") o.bus_off_at_s = number(0);
     else if (a == "--bus-off-ms") o.bus_off_ms = number(0);
     else if (a == "--seed") o.seed = static_cast<unsigned>(number(0));
+    else if (a == "--out-interval-ms") o.out_interval_ms = number(0);
+    else if (a == "--hid-report-descriptor") print_hid_descriptor(v);
     else throw std::invalid_argument("unknown option " + a + " (see --help)");
   }
   if (!rig_file.empty()) {
@@ -136,6 +158,11 @@ Options parse(int argc, char** argv) {
   if (o.kind != "haptic_arm" && o.kind != "spacemouse")
     throw std::invalid_argument("--kind " + o.kind + ": choose haptic_arm or spacemouse");
   if (o.drop_probability > 1) throw std::invalid_argument("--drop-probability must be within 0..1");
+  const bool slow_capable = o.device.transport.kind == config::TransportKind::usb_bulk ||
+                            (o.device.transport.kind == config::TransportKind::hid && is_gadget_hid(o));
+  if (o.out_interval_ms > 0 && !slow_capable)
+    throw std::invalid_argument("--out-interval-ms needs a USB link whose transfers the device takes: "
+                                "--transport usb_bulk, or hid with --address /dev/hidgN (uhid only queues them)");
   return o;
 }
 
@@ -183,10 +210,14 @@ void send_spacemouse_reports(device::Transport& transport, const config::PoseTwi
 }
 
 // The device end of the rig's transport. USB is presented for real where the kernel can: HID
-// through uhid (the host's hidapi sees a hidraw node), bulk through a FunctionFS gadget.
+// through uhid (the host's hidapi sees a hidraw node) or a gadget's hid function (the host sees a
+// USB HID device), bulk through a FunctionFS gadget.
 std::unique_ptr<device::MessageLink> open_device_side(const Options& o, fake::UhidTransport** uhid) {
   const config::Transport& t = o.device.transport;
   const auto node = static_cast<std::uint8_t>(t.can_node_id);
+  if (t.kind == config::TransportKind::hid && is_gadget_hid(o))
+    return std::make_unique<device::MessageLink>(std::make_unique<fake::HidgTransport>(t.address, o.out_interval_ms),
+                                                 device::Framing::hid, node, device::Side::device);
   if (t.kind == config::TransportKind::hid) {
     std::uint16_t vendor = 0, product = 0;
     device::parse_vid_pid(t.address, vendor, product);
@@ -199,7 +230,7 @@ std::unique_ptr<device::MessageLink> open_device_side(const Options& o, fake::Uh
     return std::make_unique<device::MessageLink>(std::move(transport), device::Framing::hid, node, device::Side::device);
   }
   if (t.kind == config::TransportKind::usb_bulk)
-    return std::make_unique<device::MessageLink>(std::make_unique<fake::FunctionFsTransport>(t.address),
+    return std::make_unique<device::MessageLink>(std::make_unique<fake::FunctionFsTransport>(t.address, o.out_interval_ms),
                                                  device::Framing::bulk, node, device::Side::device);
   return device::open_link(t, device::Side::device);
 }

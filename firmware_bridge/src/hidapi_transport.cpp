@@ -1,11 +1,15 @@
-// HID transport over hidapi's hidraw backend: 64-byte reports, non-blocking reads. A device that
-// is not there (absent at open, or unplugged later) is reported as kDisconnected and opened by its
-// address (VID:PID or hidraw path) every 200 ms by a ReopenWorker thread, so the same driver
-// takes it up when it appears without the loop blocking on hid_open.
+// HID transport over hidapi's hidraw backend: 64-byte reports. hid_write waits until the USB
+// transfer is done (the interrupt OUT endpoint's next slot, longer on a busy device), so reports
+// are read and written by two threads of the transport's own, which hand frames to and from the
+// loop without blocking it (frame_handoff.hpp). A device that is not there (absent at open, or
+// unplugged later) is reported as kDisconnected and opened by its address (VID:PID or hidraw path)
+// every 200 ms by a ReopenWorker thread; the reader thread takes it up when it appears.
 #include <fcntl.h>
 #include <hidapi/hidapi.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
+#include <pthread.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -13,7 +17,9 @@
 #include <cstring>
 #include <cwchar>
 #include <mutex>
+#include <thread>
 
+#include "hapfluid/device/frame_handoff.hpp"
 #include "hapfluid/device/reopen_worker.hpp"
 #include "hapfluid/device/usb_transports.hpp"
 
@@ -39,13 +45,9 @@ std::string narrow(const wchar_t* text) {
 
 // hidapi keeps global state (its init flag, the global error string) that hid_open, hid_init and
 // hid_close touch; reopen threads of several devices and a constructor may run at once. Held
-// only there, never by the loop (hid_read/hid_write touch only their own device).
+// only there, never by the I/O threads (hid_read/hid_write touch only their own handle) and
+// never by the loop.
 std::mutex g_hidapi_global;
-
-void close_hid(hid_device* device) {
-  std::lock_guard<std::mutex> lock(g_hidapi_global);
-  hid_close(device);
-}
 
 // The hidraw node of the first HID device VID:PID hidapi lists, or "" when none is there.
 std::string find_hid(std::uint16_t vendor, std::uint16_t product) {
@@ -84,25 +86,22 @@ bool check_hidraw_path(const std::string& path, OpenAttempt& attempt) {
   return false;
 }
 
-// Opens the address non-blocking; nullptr with `attempt` saying why. `vendor`/`product` are the
-// parsed address unless it is a /dev path.
-hid_device* open_hid(const std::string& address, std::uint16_t vendor, std::uint16_t product, OpenAttempt& attempt) {
-  std::lock_guard<std::mutex> lock(g_hidapi_global);
+// Opens the address; nullptr with `attempt` saying why. `vendor`/`product` are the parsed address
+// unless it is a /dev path. `path` is the hidraw node opened.
+hid_device* open_hid(const std::string& address, std::uint16_t vendor, std::uint16_t product, OpenAttempt& attempt,
+                     std::string& path) {
   if (hid_init() != 0) {
     attempt = {OpenFailure::permanent, "hidapi: hid_init failed: " + narrow(hid_error(nullptr))};
     return nullptr;
   }
   const bool by_path = address.rfind("/dev/", 0) == 0;
   if (by_path && !check_hidraw_path(address, attempt)) return nullptr;
-  const std::string path = by_path ? address : find_hid(vendor, product);
+  path = by_path ? address : find_hid(vendor, product);
   if (path.empty()) {
     attempt = {OpenFailure::absent, "no HID device " + address + " is connected"};
     return nullptr;
   }
-  if (hid_device* device = hid_open_path(path.c_str())) {
-    hid_set_nonblocking(device, 1);
-    return device;
-  }
+  if (hid_device* device = hid_open_path(path.c_str())) return device;
   // hidapi keeps only a text; opening the node ourselves gives the errno that tells a node that
   // is not (or no longer) there from one this process may not open (open_failure.hpp).
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
@@ -121,6 +120,38 @@ hid_device* open_hid(const std::string& address, std::uint16_t vendor, std::uint
   return nullptr;
 }
 
+// One opened device: a handle for each I/O thread. hidapi keeps per-handle state (its error
+// string) that hid_read and hid_write both rewrite, so no handle is ever used by two threads.
+struct HidConnection {
+  hid_device* reader = nullptr;
+  hid_device* writer = nullptr;
+};
+
+void close_connection(HidConnection* c) {
+  {
+    std::lock_guard<std::mutex> lock(g_hidapi_global);
+    if (c->reader) hid_close(c->reader);
+    if (c->writer) hid_close(c->writer);
+  }
+  delete c;
+}
+
+// Both handles of the address, or nullptr with `attempt` saying why.
+HidConnection* open_connection(const std::string& address, std::uint16_t vendor, std::uint16_t product,
+                               OpenAttempt& attempt) {
+  std::lock_guard<std::mutex> lock(g_hidapi_global);
+  std::string path;
+  hid_device* reader = open_hid(address, vendor, product, attempt, path);
+  if (!reader) return nullptr;
+  hid_device* writer = hid_open_path(path.c_str());
+  if (!writer) {  // the node went away between the two opens: unplugged just now
+    hid_close(reader);
+    attempt = {OpenFailure::absent, "HID device " + address + " (" + path + ") vanished while being opened"};
+    return nullptr;
+  }
+  return new HidConnection{reader, writer};
+}
+
 // Where no HID device can ever appear, waiting for one would hide the cause. The HID core
 // registers /sys/class/hidraw when it loads, which on a rig may be only when the first HID device
 // (the arm itself) is plugged in, so a missing class alone proves nothing; with no USB bus either,
@@ -130,67 +161,117 @@ bool machine_can_have_hid() {
   return ::stat("/sys/class/hidraw", &st) == 0 || machine_has_usb();
 }
 
-class HidapiTransport final : public Transport {
+// How long the reader waits in hid_read for a report before it looks at the stop flag.
+constexpr int kReadWaitMs = 50;
+
+void nap_ns(long ns) {
+  timespec t{0, ns};
+  nanosleep(&t, nullptr);
+}
+
+class HidapiTransport final : public HandoffTransport {
  public:
   explicit HidapiTransport(const std::string& address)
       : address_(address),
-        reopen_(describe(), [this](OpenAttempt& a) { return open_hid(address_, vendor_, product_, a); }, close_hid) {
+        reopen_(describe(), [this](OpenAttempt& a) { return open_connection(address_, vendor_, product_, a); },
+                close_connection) {
     if (address.rfind("/dev/", 0) != 0) parse_vid_pid(address, vendor_, product_);
     if (!machine_can_have_hid())
       throw TransportError("USB HID (hidraw) is not available on this machine (no /sys/class/hidraw, no USB): "
                            "load hid, hidraw and uhid for tests, or use the loopback transport");
     OpenAttempt attempt;
-    device_ = reopen_.first_open(attempt);
-    if (!device_ && attempt.failure == OpenFailure::permanent) throw TransportError(attempt.why);
-    if (!device_) errors_ |= kDisconnected;  // a link fault until it is plugged in and the worker opens it
+    HidConnection* first = reopen_.first_open(attempt);
+    if (!first && attempt.failure == OpenFailure::permanent) throw TransportError(attempt.why);
+    if (!first) raise(kDisconnected);  // a link fault until it is plugged in and the worker opens it
+    writer_connection_.store(first);
+    reader_ = std::thread([this, first] {
+      pthread_setname_np(pthread_self(), "hapfluid-hid-rx");
+      read_reports(first);
+    });
+    writer_ = std::thread([this] {
+      pthread_setname_np(pthread_self(), "hapfluid-hid-tx");
+      write_reports();
+    });
   }
+  // The writer first: it sends what the loop queued last (a clean stop's zero command); a write
+  // in progress ends within the kernel's USB timeout (5 s) even on a device that stopped reading.
   ~HidapiTransport() override {
-    if (device_) close_hid(device_);
-  }  // then reopen_ stops its thread and closes any device it still holds
+    stop_.store(true);
+    writer_.join();
+    reader_.join();
+  }  // then reopen_ stops its thread and closes any connection it still holds
 
-  Io send(const WireFrame& frame) override {
-    if (!device_ && !adopt()) return Io::error;  // gone: kDisconnected is set
-    int n = hid_write(device_, frame.data, frame.length);
-    if (n >= 0) return Io::ok;
-    errors_ |= kTxFailed;  // a vanished device is detected by receive()
-    return Io::error;
-  }
-  Io receive(WireFrame& frame) override {
-    if (!device_ && !adopt()) return Io::error;
-    int n = hid_read(device_, frame.data, sizeof frame.data);
-    if (n == 0) return Io::empty;
-    if (n < 0) {  // the hidraw node went away: hand the dead handle over, reopen in the background
-      errors_ |= kDisconnected;
-      reopen_.retire(device_);
-      device_ = nullptr;
-      return Io::error;
-    }
-    frame.can_id = 0;
-    frame.fd = false;
-    frame.length = static_cast<std::uint8_t>(n);
-    return Io::ok;
-  }
-  int poll_fd() const override { return -1; }
-  std::uint32_t error_flags() const override { return errors_; }
-  void clear_error_flags() override { errors_ = 0; }
-  std::uint32_t reconnects() const override { return reconnects_; }
   std::string describe() const override { return "USB HID (hidapi) " + address_; }
 
  private:
-  bool adopt() {
-    device_ = reopen_.take();
-    if (!device_) return false;
-    errors_ &= ~kDisconnected;
-    ++reconnects_;
-    return true;
+  // The reader thread owns the connection: it adopts what the reopen worker opened, moves input
+  // reports to the loop, and on a read error (the hidraw node went away) takes the connection
+  // from the writer, waits until no write uses it, and hands it to the worker to close and reopen.
+  void read_reports(HidConnection* c) {
+    while (!stop_.load()) {
+      if (!c) {
+        c = reopen_.take();
+        if (!c) {
+          nap_ns(10'000'000);
+          continue;
+        }
+        reconnected();
+        writer_connection_.store(c);
+        lower(kDisconnected);
+      }
+      WireFrame frame;
+      const int n = hid_read_timeout(c->reader, frame.data, sizeof frame.data, kReadWaitMs);
+      if (n > 0) {
+        frame.length = static_cast<std::uint8_t>(n);
+        received(frame);
+        continue;
+      }
+      if (n == 0) continue;
+      raise(kDisconnected);
+      writer_connection_.store(nullptr);
+      while (writing_.load() == c) nap_ns(1'000'000);  // a write on a vanished node fails at once
+      reopen_.retire(c);
+      c = nullptr;
+    }
+    if (c) {  // the writer has stopped
+      writer_connection_.store(nullptr);
+      close_connection(c);
+    }
+  }
+
+  // The writer thread: every frame the loop queued, newest first when the device fell behind;
+  // hid_write waits for the USB transfer. A connection is used only while announced in writing_
+  // (and still the current one), so the reader never closes it under a write. While there is no
+  // connection, whatever was queued is dropped: it would be stale by the time a device is back.
+  void write_reports() {
+    for (;;) {
+      const bool stopping = stop_.load();
+      if (HidConnection* c = writer_connection_.load()) {
+        writing_.store(c);
+        if (writer_connection_.load() == c) {
+          WireFrame frame;
+          while (next_to_send(frame))
+            if (hid_write(c->writer, frame.data, frame.length) < 0) {
+              raise(kTxFailed);  // a vanished device is detected by the reader
+              break;
+            }
+        }
+        writing_.store(nullptr);
+      } else {
+        discard_unsent();
+      }
+      if (stopping) return;
+      nap_ns(kSendPickupNs);
+    }
   }
 
   std::string address_;
   std::uint16_t vendor_ = 0, product_ = 0;  // unless address_ is a /dev path
-  hid_device* device_ = nullptr;
-  std::uint32_t errors_ = 0;
-  std::uint32_t reconnects_ = 0;
-  ReopenWorker<hid_device> reopen_;  // last: its thread stops before anything above goes
+  std::atomic<bool> stop_{false};
+  std::atomic<HidConnection*> writer_connection_{nullptr};  // the connection the writer may use
+  std::atomic<HidConnection*> writing_{nullptr};            // the one a write is using now
+  std::thread reader_, writer_;
+  ReopenWorker<HidConnection> reopen_;  // last: its thread stops before anything above goes
 };
 
 }  // namespace

@@ -1,22 +1,27 @@
-// USB bulk transport over libusb's asynchronous API: IN transfers stay submitted, completions
-// land in a small ring during service(), which polls libusb's events with a zero timeout: no
-// thread in the I/O path, no busy wait, no blocking call in the 1 kHz loop.
+// USB bulk transport over libusb's asynchronous API, driven by one I/O thread of the transport's
+// own: it keeps IN transfers submitted, submits the commands the loop queued, and handles
+// libusb's events (which take libusb's mutexes and make system calls), so the loop only touches
+// the hand-off rings (frame_handoff.hpp). Every transfer callback runs on that thread.
 //
 // Transfers are torn down by libusb's rule (usb_transfer_book.hpp): stop resubmitting, cancel,
 // handle events until every callback has returned, then free and close. An unplugged device is
 // reported as kDisconnected and the driver recovers by itself: once the dead connection's
 // transfers have all returned, a ReopenWorker thread (it never touches a live connection)
-// disposes of it and opens the device again by VID:PID every 200 ms; service() adopts the new
-// connection with a single atomic exchange, so the loop never blocks on it. A device absent at
-// open starts the same way, as if it had just been unplugged.
+// disposes of it and opens the device again by VID:PID every 200 ms; the I/O thread adopts the
+// new connection. A device absent at open starts the same way, as if it had just been unplugged.
 #include <libusb-1.0/libusb.h>
+#include <poll.h>
 #include <sys/stat.h>
+#include <pthread.h>
 #include <time.h>
 
 #include <array>
+#include <atomic>
 #include <cstdio>
 #include <cstring>
+#include <thread>
 
+#include "hapfluid/device/frame_handoff.hpp"
 #include "hapfluid/device/reopen_worker.hpp"
 #include "hapfluid/device/usb_transfer_book.hpp"
 #include "hapfluid/device/usb_transports.hpp"
@@ -26,7 +31,6 @@ namespace hapfluid::device {
 namespace {
 
 using Book = UsbTransferBook;
-constexpr int kRing = 64;             // packets; 64 ms of state at 1 kHz
 constexpr int kPacketBytes = 64;      // one protocol packet per transfer (protocol.md 4.5)
 constexpr int kCloseLimitMs = 2000;   // cancelled transfers return within ms; this only bounds a broken stack
 
@@ -48,6 +52,9 @@ struct Connection {
   std::uint8_t endpoint_out = kBulkEndpointOut;
   std::array<libusb_transfer*, Book::kIn> in{};
   std::array<libusb_transfer*, Book::kOut> out{};
+  // libusb's file descriptors (usbfs, its event and timer fds), waited on by the I/O thread.
+  std::array<pollfd, 8> fds{};
+  nfds_t fd_count = 0;
 };
 
 // Only once nothing of `c` is in flight (libusb would touch freed transfers otherwise).
@@ -132,10 +139,21 @@ Connection* connect(std::uint16_t vendor, std::uint16_t product, const std::stri
   find_bulk_endpoints(*c);
   for (auto& t : c->in) t = libusb_alloc_transfer(0);
   for (auto& t : c->out) t = libusb_alloc_transfer(0);
+  // Fixed once the device is open and claimed: one context, one device.
+  if (const libusb_pollfd** list = libusb_get_pollfds(c->context)) {
+    for (const libusb_pollfd** p = list; *p && c->fd_count < c->fds.size(); ++p)
+      c->fds[c->fd_count++] = {(*p)->fd, (*p)->events, 0};
+    libusb_free_pollfds(list);
+  }
   return c;
 }
 
-class LibusbTransport final : public Transport {
+void nap_ns(long ns) {
+  timespec t{0, ns};
+  nanosleep(&t, nullptr);
+}
+
+class LibusbTransport final : public HandoffTransport {
  public:
   explicit LibusbTransport(const std::string& address)
       : address_(address),
@@ -151,15 +169,60 @@ class LibusbTransport final : public Transport {
     if (!live_ && attempt.failure == OpenFailure::permanent) throw TransportError(attempt.why);
     if (live_) {
       start_streaming();
-    } else {  // a link fault until it is plugged in; service() adopts what the worker opens
+    } else {  // a link fault until it is plugged in; the I/O thread adopts what the worker opens
       book_.lose();
-      errors_ |= kDisconnected;
+      raise(kDisconnected);
     }
+    io_ = std::thread([this] {
+      pthread_setname_np(pthread_self(), "hapfluid-usb-io");
+      run();
+    });
   }
 
   ~LibusbTransport() override {
-    // Closing: no callback resubmits from here on; cancel what is in flight and handle events
-    // until every callback has returned. Only then may the transfers be freed.
+    stop_.store(true);
+    io_.join();
+  }  // then reopen_ stops its thread and disposes of any connection it still holds
+
+  std::string describe() const override { return "USB bulk (libusb) " + address_; }
+
+ private:
+  struct SlotRef {
+    LibusbTransport* self = nullptr;
+    int slot = 0;
+  };
+
+  // The I/O thread. Each pass: adopt a reopened connection if the last one was lost, submit what
+  // the loop queued, wait for libusb's events (at most kSendPickupNs, so new commands go out
+  // without the loop waking anyone), handle them (callbacks), deal with a lost device.
+  void run() {
+    while (!stop_.load()) {
+      if (!live_) {
+        discard_unsent();  // queued for the lost connection: stale by the time a device is back
+        if (Connection* c = reopen_.take()) adopt(c);
+        else nap_ns(10'000'000);
+        continue;
+      }
+      submit_queued();
+      timespec pickup{0, kSendPickupNs};
+      ::ppoll(live_->fds.data(), live_->fd_count, &pickup, nullptr);
+      timeval zero{0, 0};
+      libusb_handle_events_timeout_completed(live_->context, &zero, nullptr);
+      if (book_.phase() == Book::Phase::lost) retire_when_quiet();
+    }
+    close();
+  }
+
+  // Closing: what the loop queued last (a clean stop's zero command) goes out first, within the
+  // transfers' own timeout. Then no callback resubmits; cancel what is in flight and handle events
+  // until every callback has returned. Only then may the transfers be freed.
+  void close() {
+    if (live_ && book_.phase() == Book::Phase::streaming) {
+      submit_queued();
+      timeval tick{0, 10000};
+      for (int waited_ms = 0; book_.out_flight() > 0 && waited_ms < kOutTimeoutMs; waited_ms += 10)
+        libusb_handle_events_timeout_completed(live_->context, &tick, nullptr);
+    }
     book_.begin_close();
     if (live_) {
       cancel_in_flight();
@@ -175,69 +238,40 @@ class LibusbTransport final : public Transport {
     } else {
       dispose(live_);
     }
-  }  // then reopen_ stops its thread and disposes of any connection it still holds
-
-  Io send(const WireFrame& frame) override {
-    service();
-    const int slot = book_.free_out_slot();
-    if (slot < 0) {
-      if (book_.phase() != Book::Phase::streaming) return Io::error;  // gone: kDisconnected is set
-      errors_ |= kTxFailed;  // eight commands in flight: the device stopped reading
-      return Io::error;
-    }
-    std::memcpy(out_buffer_[slot], frame.data, frame.length);
-    libusb_transfer* t = live_->out[slot];
-    libusb_fill_bulk_transfer(t, live_->handle, live_->endpoint_out, out_buffer_[slot], frame.length,
-                              &LibusbTransport::on_out, &out_refs_[slot], 100);
-    const int r = libusb_submit_transfer(t);
-    if (r != 0) {
-      book_.submit_failed(r == LIBUSB_ERROR_NO_DEVICE);
-      errors_ |= r == LIBUSB_ERROR_NO_DEVICE ? kDisconnected : kTxFailed;
-      return Io::error;
-    }
-    book_.submitted_out(slot);
-    return Io::ok;
+    live_ = nullptr;
   }
 
-  Io receive(WireFrame& frame) override {
-    service();
-    if (head_ == tail_) return (errors_ & kDisconnected) ? Io::error : Io::empty;
-    frame = ring_[tail_ % kRing];
-    ++tail_;
-    return Io::ok;
+  // The loop's queued frames, newest first when the device fell behind, while an OUT slot is free.
+  void submit_queued() {
+    for (int slot = book_.free_out_slot(); slot >= 0; slot = book_.free_out_slot()) {
+      WireFrame frame;
+      if (!next_to_send(frame)) return;
+      std::memcpy(out_buffer_[slot], frame.data, frame.length);
+      libusb_transfer* t = live_->out[slot];
+      libusb_fill_bulk_transfer(t, live_->handle, live_->endpoint_out, out_buffer_[slot], frame.length,
+                                &LibusbTransport::on_out, &out_refs_[slot], kOutTimeoutMs);
+      const int r = libusb_submit_transfer(t);
+      if (r != 0) {
+        book_.submit_failed(r == LIBUSB_ERROR_NO_DEVICE);
+        raise(r == LIBUSB_ERROR_NO_DEVICE ? kDisconnected : kTxFailed);
+        return;
+      }
+      book_.submitted_out(slot);
+    }
   }
 
-  void service() override {
-    if (!live_) {
-      // Unplugged: adopt the connection the reconnect thread opened, if any (one atomic exchange).
-      if (Connection* c = reopen_.take()) adopt(c);
-      return;
-    }
-    timeval zero{0, 0};
-    libusb_handle_events_timeout_completed(live_->context, &zero, nullptr);
-    if (book_.phase() != Book::Phase::lost) return;
-    errors_ |= kDisconnected;
-    if (!cancelled_) {  // the rest of the transfers end now rather than by their own errors
+  // The device is gone: the rest of the transfers end now rather than by their own errors; once
+  // every callback returned, the dead connection goes to the worker, which reopens the device.
+  void retire_when_quiet() {
+    raise(kDisconnected);
+    if (!cancelled_) {
       cancel_in_flight();
       cancelled_ = true;
     }
-    if (book_.quiescent()) {  // every callback returned: hand the dead connection over, reconnect
-      reopen_.retire(live_);
-      live_ = nullptr;
-    }
+    if (!book_.quiescent()) return;
+    reopen_.retire(live_);
+    live_ = nullptr;
   }
-
-  int poll_fd() const override { return -1; }
-  std::uint32_t error_flags() const override { return errors_; }
-  void clear_error_flags() override { errors_ = 0; }
-  std::uint32_t reconnects() const override { return reconnects_; }
-  std::string describe() const override { return "USB bulk (libusb) " + address_; }
-
- private:
-  struct SlotRef {
-    LibusbTransport* self = nullptr;
-    int slot = 0;
-  };
 
   void start_streaming() {
     for (int i = 0; i < Book::kIn; ++i) {
@@ -247,15 +281,15 @@ class LibusbTransport final : public Transport {
       if (r == 0) book_.submitted_in(i);
       else book_.submit_failed(true);
     }
-    if (book_.phase() == Book::Phase::lost) errors_ |= kDisconnected;
+    if (book_.phase() == Book::Phase::lost) raise(kDisconnected);
   }
 
   void adopt(Connection* c) {
     live_ = c;
     book_.restart();  // lost and quiescent, checked before the old connection was retired
     cancelled_ = false;
-    errors_ &= ~kDisconnected;
-    ++reconnects_;
+    reconnected();
+    lower(kDisconnected);
     start_streaming();
   }
 
@@ -271,44 +305,39 @@ class LibusbTransport final : public Transport {
     LibusbTransport* self = ref->self;
     const Book::InAction action = self->book_.completed_in(ref->slot, status_of(transfer->status));
     if (action.deliver && transfer->actual_length > 0) {
-      if (self->head_ - self->tail_ >= kRing) {
-        self->errors_ |= kRxOverflow;
-        ++self->tail_;  // keep the newest: the loop wants the latest state
-      }
-      WireFrame& frame = self->ring_[self->head_ % kRing];
-      frame.can_id = 0;
-      frame.fd = false;
+      WireFrame frame;
       frame.length = static_cast<std::uint8_t>(transfer->actual_length);
       std::memcpy(frame.data, transfer->buffer, frame.length);
-      ++self->head_;
+      self->received(frame);
     }
     if (action.resubmit) {
       if (libusb_submit_transfer(transfer) == 0) self->book_.submitted_in(ref->slot);
       else self->book_.submit_failed(true);  // a bulk IN that cannot be queued: the device is unusable
     }
-    if (self->book_.phase() == Book::Phase::lost) self->errors_ |= kDisconnected;
+    if (self->book_.phase() == Book::Phase::lost) self->raise(kDisconnected);
   }
 
   static void LIBUSB_CALL on_out(libusb_transfer* transfer) {
     const auto* ref = static_cast<const SlotRef*>(transfer->user_data);
     LibusbTransport* self = ref->self;
-    if (self->book_.completed_out(ref->slot, status_of(transfer->status))) self->errors_ |= kTxFailed;
-    if (self->book_.phase() == Book::Phase::lost) self->errors_ |= kDisconnected;
+    if (self->book_.completed_out(ref->slot, status_of(transfer->status))) self->raise(kTxFailed);
+    if (self->book_.phase() == Book::Phase::lost) self->raise(kDisconnected);
   }
+
+  static constexpr int kOutTimeoutMs = 100;  // a command older than this is worthless to the device
 
   std::string address_;
   std::uint16_t vendor_ = 0, product_ = 0;
-  Connection* live_ = nullptr;  // owned by the loop thread
+  // The I/O thread's (the constructor's until it starts).
+  Connection* live_ = nullptr;
   Book book_;
   bool cancelled_ = false;
   std::array<SlotRef, Book::kIn> in_refs_{};
   std::array<SlotRef, Book::kOut> out_refs_{};
   unsigned char in_buffer_[Book::kIn][kPacketBytes] = {};
   unsigned char out_buffer_[Book::kOut][kPacketBytes] = {};
-  std::array<WireFrame, kRing> ring_{};
-  std::uint64_t head_ = 0, tail_ = 0;
-  std::uint32_t errors_ = 0;
-  std::uint32_t reconnects_ = 0;
+  std::atomic<bool> stop_{false};
+  std::thread io_;
   ReopenWorker<Connection> reopen_;  // last: its thread stops before anything above goes
 };
 

@@ -14,9 +14,8 @@
 namespace hapfluid::device {
 
 bool wait_readable(Transport& transport, int timeout_ms) {
-  transport.service();
   int fd = transport.poll_fd();
-  if (fd < 0) {  // hidapi/libusb expose no single fd: nap one millisecond, let the caller poll
+  if (fd < 0) {  // hidapi/libusb hand frames over from their own threads: nap, let the caller poll
     timespec nap{0, 1'000'000};
     nanosleep(&nap, nullptr);
     return true;

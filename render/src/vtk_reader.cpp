@@ -101,8 +101,9 @@ class Parser {
     throw std::runtime_error(name_ + ": line " + std::to_string(line_number_) + ": " + what);
   }
 
+  // Whitespace as split() sees it: a line of only \v or \f is blank, not a header without a word.
   static std::string trimmed(const std::string& s) {
-    size_t a = s.find_first_not_of(" \t\r"), b = s.find_last_not_of(" \t\r");
+    size_t a = s.find_first_not_of(" \t\r\n\v\f"), b = s.find_last_not_of(" \t\r\n\v\f");
     return a == std::string::npos ? "" : s.substr(a, b - a + 1);
   }
 
@@ -154,13 +155,18 @@ class Parser {
   std::vector<double> read_values(size_t n, const std::string& type) {
     const size_t size = type_size(type);
     if (size == 0) fail("unsupported data type \"" + type + "\"");
+    // The count comes from the file: check that the rest of the file can hold that many values
+    // before allocating them. A binary value takes `size` bytes, an ASCII one at least a
+    // character and a separator.
+    const size_t left = data_.size() - pos_;
+    if (binary_ ? n > left / size : n > (left + 1) / 2)
+      fail(std::string(binary_ ? "binary" : "ASCII") + " data ends early: " + std::to_string(n) + " values of " +
+           type + " do not fit in the file");
     std::vector<double> out(n);
     if (!binary_) {
       for (size_t i = 0; i < n; ++i) out[i] = ascii_number();
       return out;
     }
-    if (pos_ + n * size > data_.size())
-      fail("binary data ends early: " + std::to_string(n) + " values of " + type + " do not fit in the file");
     const std::string t = lower(type);
     for (size_t i = 0; i < n; ++i) {
       unsigned char b[8];

@@ -125,3 +125,31 @@ TEST(Mesh, TruncatedBinaryStlAndUnknownFormatAreRejected) {
   std::filesystem::remove(stl);
   EXPECT_THROW(load_mesh("config/scenes/dam_break.toml"), ConfigError);
 }
+
+TEST(Mesh, BinaryStlWithANonFiniteVertexIsRejectedLikeAnObjOne) {
+  // A NaN or infinite coordinate would reach the simulator's sampling grid; OBJ and ASCII STL
+  // refuse one as text, and the binary reader must too.
+  auto stl = temp_file("nan.stl");
+  {
+    std::ofstream out(stl, std::ios::binary);
+    char header[80] = {};
+    uint32_t n = 2;
+    out.write(header, 80);
+    out.write(reinterpret_cast<const char*>(&n), 4);
+    for (float bad : {0.0f, std::nanf("")}) {
+      const float record[12] = {0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, bad};
+      uint16_t attribute = 0;
+      out.write(reinterpret_cast<const char*>(record), sizeof record);
+      out.write(reinterpret_cast<const char*>(&attribute), 2);
+    }
+  }
+  try {
+    load_mesh(stl);
+    FAIL() << "a NaN vertex must not load";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("nan.stl: binary STL triangle 1 has a vertex that is not 3 finite numbers"),
+              std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove(stl);
+}

@@ -24,6 +24,8 @@ MODULES = [
     "hid", "uhid", "hid-generic",                 # userspace HID devices -> /dev/hidrawN
     "usbcore", "udc-core", "dummy_hcd",           # a USB host and device controller pair
     "libcomposite", "usb_f_fs", "usb_f_ss_lb",    # FunctionFS gadgets, loopback function
+    "usb_f_hid", "usbhid",                        # a HID gadget and the host's USB HID driver
+    "sch_tbf",                                    # a CAN queue that holds frames (full TX queue)
 ]
 # Two virtual UDCs: one for the project's gadget, one spare (e.g. a second device).
 MODULE_OPTIONS = {"dummy_hcd": "num=2"}

@@ -105,3 +105,36 @@ TEST(VtkReader, RejectsFilesThatAreNotParticleData) {
                 .find("does not match POINTS"),
             std::string::npos);
 }
+
+TEST(VtkReader, CountsTheFileCannotHoldFailBeforeAnythingIsAllocated) {
+  // haptic-render --replay reads any file it is pointed at: a count in a 70-byte file must not
+  // make it allocate for it (2^31 ASCII points were 48 GB of doubles; a binary section of 2^62
+  // values overflowed the size check and was then allocated).
+  auto message = [](const std::string& text) {
+    try {
+      parse_vtk_points(text, "big.vtk");
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string ascii = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 2147483648 float\n1 2 3\n";
+  EXPECT_NE(message(ascii).find("big.vtk: line 5: ASCII data ends early: 6442450944 values"), std::string::npos)
+      << message(ascii);
+  std::string binary = "# vtk DataFile Version 3.0\nt\nBINARY\nDATASET POLYDATA\nPOINT_DATA 2147483648\n"
+                       "SCALARS speed double 2147483648\nLOOKUP_TABLE default\n";
+  put_big_endian(binary, 1.0);
+  EXPECT_NE(message(binary).find("binary data ends early: 4611686018427387904 values"), std::string::npos)
+      << message(binary);
+}
+
+TEST(VtkReader, ALineOfOtherWhitespaceIsBlank) {
+  // A line of a vertical tab or a form feed has no word: it is skipped like an empty line (it
+  // once reached the section parser as a header without a first word).
+  const std::string file =
+      "# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\n\v\nPOINTS 1 float\n0 0 1\n\f \n"
+      "POINT_DATA 1\nSCALARS kind int 1\nLOOKUP_TABLE default\n2\n";
+  VtkPoints v = parse_vtk_points(file, "x.vtk");
+  ASSERT_EQ(v.points_m.size(), 1u);
+  EXPECT_EQ(v.point_scalars["kind"], (std::vector<double>{2}));
+}

@@ -1,10 +1,11 @@
-// The 1 kHz loop allocates nothing and takes no lock after start-up (issue 5; style: "real-time
-// code reads like real-time code"). This binary replaces operator new/delete, malloc & co. and
-// pthread_mutex_lock with counting versions that count only on the loop's thread, runs the real
-// RtLoop::run() for 1.5 s at 1 kHz through every path (sim samples in both wrench modes, NaN
-// samples, a silenced device = link fault and recovery, e-stop and reset, sim restart with a
-// re-attach), and requires zero of both.
-#include <dlfcn.h>
+// The 1 kHz loop allocates nothing, takes no lock and makes no system call but its own sleep
+// after start-up (style: "real-time code reads like real-time code"). The counters
+// (thread_counters.hpp: replaced malloc & co. and pthread lock calls, a seccomp watch for system
+// calls) count only on the loop's thread, which runs the real RtLoop::run() for 1.5 s at 1 kHz
+// through every path (sim samples in both wrench modes, NaN samples, a silenced device = link
+// fault and recovery, e-stop and reset, sim restart with a re-attach) and requires zero of each.
+// The devices here are simulated; hil-loop-io-check (tests/hil-kernel/harness) holds the real
+// transports to the same counters on a real kernel.
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <unistd.h>
@@ -13,59 +14,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <new>
 #include <thread>
 
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/loop.hpp"
 #include "hapfluid/rt/simulated_device.hpp"
-
-extern "C" void* __libc_malloc(size_t);
-extern "C" void* __libc_calloc(size_t, size_t);
-extern "C" void* __libc_realloc(void*, size_t);
-extern "C" void __libc_free(void*);
-
-namespace {
-thread_local bool t_counting = false;
-std::atomic<long> g_allocations{0};
-std::atomic<long> g_locks{0};
-void count_allocation() {
-  if (t_counting) g_allocations.fetch_add(1, std::memory_order_relaxed);
-}
-}  // namespace
-
-extern "C" {
-void* malloc(size_t n) {
-  count_allocation();
-  return __libc_malloc(n);
-}
-void* calloc(size_t a, size_t b) {
-  count_allocation();
-  return __libc_calloc(a, b);
-}
-void* realloc(void* p, size_t n) {
-  count_allocation();
-  return __libc_realloc(p, n);
-}
-void free(void* p) { __libc_free(p); }
-int pthread_mutex_lock(pthread_mutex_t* m) {
-  using Fn = int (*)(pthread_mutex_t*);
-  static Fn real = reinterpret_cast<Fn>(dlsym(RTLD_NEXT, "pthread_mutex_lock"));
-  if (t_counting) g_locks.fetch_add(1, std::memory_order_relaxed);
-  return real(m);
-}
-}
-
-void* operator new(std::size_t n) {
-  count_allocation();
-  if (void* p = __libc_malloc(n ? n : 1)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t n) { return operator new(n); }
-void operator delete(void* p) noexcept { __libc_free(p); }
-void operator delete[](void* p) noexcept { __libc_free(p); }
-void operator delete(void* p, std::size_t) noexcept { __libc_free(p); }
-void operator delete[](void* p, std::size_t) noexcept { __libc_free(p); }
+#include "thread_counters.hpp"
 
 using namespace hapfluid;
 
@@ -93,17 +47,33 @@ address = "/tmp/unused-right"
 
 }  // namespace
 
-TEST(LoopAllocations, CountersSeeAllocationsAndLocksOnTheCountingThread) {
-  // Control: the hooks are really in place (otherwise the zero below would prove nothing).
-  t_counting = true;
-  delete new int(1);
-  free(malloc(16));
-  pthread_mutex_t mutex = PTHREAD_MUTEX_INITIALIZER;
-  pthread_mutex_lock(&mutex);
-  pthread_mutex_unlock(&mutex);
-  t_counting = false;
-  EXPECT_EQ(g_allocations.exchange(0), 2);
-  EXPECT_EQ(g_locks.exchange(0), 1);
+TEST(LoopAllocations, CountersSeeAllocationsLocksAndSystemCallsOnTheCountingThread) {
+  // Control: the hooks are really in place (otherwise the zeros below would prove nothing).
+  counters::SyscallWatch watch;
+  std::string why;
+  std::thread watched([&] {
+    ASSERT_TRUE(watch.watch_this_thread(why)) << why;
+    counters::count_on_this_thread(true);
+    int* volatile object = new int(1);  // volatile: the compiler may not elide the pair
+    delete object;
+    void* volatile block = malloc(16);
+    free(block);
+    pthread_mutex_t mutex = PTHREAD_MUTEX_INITIALIZER;
+    pthread_mutex_lock(&mutex);
+    pthread_mutex_unlock(&mutex);
+    watch.start();  // after this thread's first allocation, which maps its malloc arena
+    (void)!::write(-1, "", 0);
+    (void)::getppid();
+    timespec nap{0, 1000};
+    clock_nanosleep(CLOCK_MONOTONIC, 0, &nap, nullptr);  // the loop's own sleep: not counted
+    watch.stop();
+    counters::count_on_this_thread(false);
+  });
+  watched.join();
+  EXPECT_EQ(counters::allocations(), 2);
+  EXPECT_EQ(counters::locks(), 1);
+  EXPECT_EQ(watch.total(), 2) << watch.summary();
+  counters::reset_counts();
 }
 
 TEST(LoopAllocations, LoopAllocatesNothingAndTakesNoLockAfterStartUp) {
@@ -155,19 +125,30 @@ TEST(LoopAllocations, LoopAllocatesNothingAndTakesNoLockAfterStartUp) {
     }
   });
 
-  loop.run(200'000'000);  // start-up: first faults, first samples, every branch warmed once
-  std::uint64_t warm_ticks = loop.ticks();
-  t_counting = true;
-  loop.run(1'500'000'000);
-  t_counting = false;
+  counters::SyscallWatch watch;
+  std::string refused;
+  std::uint64_t warm_ticks = 0;
+  std::thread loop_thread([&] {  // the filter stays with this thread, which ends here
+    if (!watch.watch_this_thread(refused)) return;
+    loop.run(200'000'000);  // start-up: first faults, first samples, every branch warmed once
+    warm_ticks = loop.ticks();
+    counters::count_on_this_thread(true);
+    watch.start();
+    loop.run(1'500'000'000);
+    watch.stop();
+    counters::count_on_this_thread(false);
+  });
+  loop_thread.join();
   stop.store(true);
   sim_thread.join();
+  ASSERT_TRUE(refused.empty()) << refused;
 
   std::uint64_t counted_ticks = loop.ticks() - warm_ticks;
   // ~1500 on an idle machine; the floor only proves the loop ran through every phase below.
   EXPECT_GT(counted_ticks, 500u);
-  EXPECT_EQ(g_allocations.load(), 0) << "allocations inside the loop";
-  EXPECT_EQ(g_locks.load(), 0) << "mutex locks inside the loop";
+  EXPECT_EQ(counters::allocations(), 0) << "allocations inside the loop";
+  EXPECT_EQ(counters::locks(), 0) << "mutex locks inside the loop";
+  EXPECT_EQ(watch.total(), 0) << "system calls inside the loop besides its sleep: " << watch.summary();
   EXPECT_EQ(loop.sim_epoch_in_use(), 2u) << "the loop moved to the restarted sim's segment";
   EXPECT_GT(loop.link_quality(0).longest_miss_run, 5u) << "the link-fault path was exercised";
   sim.close();

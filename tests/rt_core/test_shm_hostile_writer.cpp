@@ -119,6 +119,24 @@ TEST(ShmHostileWriter, SizesThatOnlyAddUpByOverflowAreRefusedAtAttach) {
   a.writer.close();
 }
 
+TEST(ShmHostileWriter, RecordSizeThatOnlyFitsItsSlotByOverflowIsRefusedAtAttach) {
+  // A record size of 2^64 - 1 padded to whole words wrapped to 0 and "fit" any slot; a reader that
+  // takes the writer's record size (haptic-render's particles, payload 0) then sized its copy
+  // from it. Attach must refuse it like any record larger than its slot.
+  const std::string name = unique_name("payload");
+  LatestWriter writer = LatestWriter::create(name, ChannelKind::particles, particle_frame_bytes(4), 2);
+  const_cast<Segment&>(writer.segment()).writable_header().payload_bytes = ~0ull;
+  try {
+    LatestReader::attach(name, ChannelKind::particles, 0);
+    ADD_FAILURE() << "a record of 2^64 - 1 bytes in a 1 KB slot was accepted";
+  } catch (const ShmError& e) {
+    EXPECT_NE(std::string(e.what()).find("payload_bytes 18446744073709551615 does not fit a 1088-byte slot"),
+              std::string::npos)
+        << e.what();
+  }
+  writer.close();
+}
+
 TEST(ShmHostileWriter, SlotCountZeroAndTruncatedObjectAreRefusedAtAttachWithTheReason) {
   Attached a = attached_channel("attach0");
   a.shared_header().slot_count = 0;

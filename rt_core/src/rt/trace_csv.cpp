@@ -16,9 +16,12 @@ void write_trace_header(std::FILE* out, unsigned devices) {
 }
 
 void write_trace_row(std::FILE* out, const shm::TraceRecord& r, unsigned devices) {
+  // Modulo 2^64 like the stamps themselves: a record from another process may hold any values,
+  // and a signed difference of two stamps could overflow.
+  const auto wake_latency_ns = static_cast<std::int64_t>(r.wake_ns - r.scheduled_ns);
   std::fprintf(out, "%" PRIu64 ",%" PRIu64 ",%" PRIu64 ",%" PRId64 ",%u,%u,%" PRId64 ",%u,%u,%" PRIu64 ",%" PRIu64 ",%" PRIu64,
                r.tick,
-               r.scheduled_ns, r.wake_ns, std::int64_t(r.wake_ns) - std::int64_t(r.scheduled_ns), r.compute_ns,
+               r.scheduled_ns, r.wake_ns, wake_latency_ns, r.compute_ns,
                r.io_ns, r.sim_age_ns, r.loop_flags, r.overruns, r.sim_device_tick, r.sim_publish_ns, r.send_ns);
   for (unsigned i = 0; i < devices && i < unsigned(shm::kMaxDevices); ++i) {
     const auto& d = r.devices[i];

@@ -71,7 +71,9 @@ std::string layout_problem(const SegmentLayout& l, std::uint64_t object_bytes) {
   if (l.slot_count == 0 || l.slot_count > kMaxSlots) return "slot_count " + n(l.slot_count) + " is out of range";
   if (l.slot_bytes < kSlotHeaderBytes || l.slot_bytes % kSlotHeaderBytes != 0 || l.slot_bytes > object_bytes)
     return "slot_bytes " + n(l.slot_bytes) + " is not a multiple of 64 that fits the object";
-  if (l.slot_bytes - kSlotHeaderBytes < padded_payload_bytes(l.payload_bytes))
+  // The unpadded size first: padding a size within 7 of 2^64 wraps it to a small one.
+  if (l.payload_bytes > l.slot_bytes - kSlotHeaderBytes ||
+      l.slot_bytes - kSlotHeaderBytes < padded_payload_bytes(l.payload_bytes))
     return "payload_bytes " + n(l.payload_bytes) + " does not fit a " + n(l.slot_bytes) + "-byte slot";
   // slot_bytes <= object_bytes and slot_count <= 2^24: the product cannot overflow.
   if (sizeof(SegmentHeader) + l.slot_bytes * l.slot_count != l.total_bytes)

@@ -21,22 +21,40 @@ vcan_up() {
     ip link set "$1" mtu "$2" || fail "ip link set $1 mtu $2"
     ip link set "$1" up || fail "ip link set $1 up"
 }
-# ffs_gadget NAME VID PID MOUNT: a configfs gadget with one FunctionFS function, its ep0 mounted
-# at MOUNT. The caller starts the function's process on MOUNT, then binds with gadget_bind.
-ffs_gadget() {
+# gadget NAME VID PID FUNCTION: a configfs gadget with one configuration holding one function
+# (e.g. ffs.NAME, hid.NAME), created and linked; the caller sets the function up.
+gadget() {
     local g=/sys/kernel/config/usb_gadget/$1
     mkdir -p "$g" || fail "configfs gadget $g"
     echo "0x$2" >"$g/idVendor"; echo "0x$3" >"$g/idProduct"
     echo 0x0200 >"$g/bcdUSB"; echo 0x0100 >"$g/bcdDevice"
-    mkdir -p "$g/strings/0x409" "$g/configs/c.1/strings/0x409" "$g/functions/ffs.$1"
+    mkdir -p "$g/strings/0x409" "$g/configs/c.1/strings/0x409" "$g/functions/$4" || fail "gadget function $4"
     echo "hapfluid" >"$g/strings/0x409/manufacturer"
     echo "$1" >"$g/strings/0x409/product"
     echo "HIL-$1" >"$g/strings/0x409/serialnumber"
     echo "$1 config" >"$g/configs/c.1/strings/0x409/configuration"
     echo 100 >"$g/configs/c.1/MaxPower"
-    ln -s "$g/functions/ffs.$1" "$g/configs/c.1/" 2>/dev/null || true
+}
+gadget_link() { ln -s "/sys/kernel/config/usb_gadget/$1/functions/$2" "/sys/kernel/config/usb_gadget/$1/configs/c.1/" 2>/dev/null || true; }
+# ffs_gadget NAME VID PID MOUNT: a configfs gadget with one FunctionFS function, its ep0 mounted
+# at MOUNT. The caller starts the function's process on MOUNT, then binds with gadget_bind.
+ffs_gadget() {
+    gadget "$1" "$2" "$3" "ffs.$1"
+    gadget_link "$1" "ffs.$1"
     mkdir -p "$4"
     mount -t functionfs "$1" "$4" || fail "mount -t functionfs $1 $4"
+}
+# hid_gadget NAME VID PID: a configfs gadget with one HID function (usb_f_hid) presenting the
+# arm's report descriptor with 64-byte reports, as the real arm does over USB. Bind it with
+# gadget_bind: the host's usbhid then gives it a hidraw node, and the function's /dev/hidgN
+# (the only one: tests run one gadget at a time) is the device side for haptic-fake-device.
+hid_gadget() {
+    local f=/sys/kernel/config/usb_gadget/$1/functions/hid.$1 hex
+    gadget "$1" "$2" "$3" "hid.$1"
+    echo 0 >"$f/protocol"; echo 0 >"$f/subclass"; echo 64 >"$f/report_length"
+    hex=$("$HIL_BIN/haptic-fake-device" --hid-report-descriptor haptic_arm) || fail "no report descriptor"
+    printf '%b' "$(echo "$hex" | sed 's/../\\x&/g')" >"$f/report_desc" || fail "writing $f/report_desc"
+    gadget_link "$1" "hid.$1"
 }
 # gadget_bind NAME UDC: plugs the gadget into the virtual bus (after its function wrote its
 # descriptors: before that the bind fails with ENODEV).

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include "hapfluid/config/types.hpp"
@@ -19,6 +20,8 @@ struct TriangleMesh {
 
 // Throws ConfigError naming the file, the line and what was wrong.
 TriangleMesh load_mesh(const std::filesystem::path& file);
+// The same for a mesh file's bytes; the format comes from file_for_messages' extension.
+TriangleMesh parse_mesh(const std::string& bytes, const std::filesystem::path& file_for_messages);
 
 Aabb mesh_bounds(const TriangleMesh& mesh);
 

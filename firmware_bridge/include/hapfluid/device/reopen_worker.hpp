@@ -1,13 +1,14 @@
-// Reopening a lost device without blocking the 1 kHz loop. Opening (libusb_init + enumeration,
-// hid_open, a CAN socket's bind) allocates and blocks for milliseconds, so a transport whose
-// device vanished, or was absent at open, hands the dead handle (or none) to this worker's
-// thread, which closes it and calls `open` every `period_ms` until it returns a handle; the loop
-// picks that up with take(). Both directions are one atomic exchange, and waking the idle thread
-// is one futex call: no lock, no allocation, no wait in the loop thread. Used by the SocketCAN,
-// libusb and hidapi transports; unit-tested with a fake handle
-// (tests/firmware_bridge/test_reopen_worker.cpp).
+// Reopening a lost device without blocking the thread that uses it. Opening (libusb_init +
+// enumeration, hid_open, a CAN socket's bind) allocates and blocks for milliseconds, so a
+// transport whose device vanished, or was absent at open, hands the dead handle (or none) to this
+// worker's thread, which closes it and calls `open` every `period_ms` until it returns a handle;
+// the handle's user picks that up with take(): the 1 kHz loop itself for SocketCAN, the
+// transport's I/O thread for libusb and hidapi. Both directions are one atomic exchange, and
+// waking the idle thread is one futex call: no lock, no allocation, no wait for the user.
+// Unit-tested with a fake handle (tests/firmware_bridge/test_reopen_worker.cpp).
 #pragma once
 
+#include <pthread.h>
 #include <time.h>
 
 #include <atomic>
@@ -24,11 +25,14 @@ class ReopenWorker {
  public:
   // open: a new handle, or nullptr with the attempt saying why (absent, or there but refusing:
   // both are retried, a persisting refusal is logged once under `name`); never called from the
-  // loop thread. close: releases a handle given back by retire() or never taken.
+  // handle's user. close: releases a handle given back by retire() or never taken.
   ReopenWorker(std::string name, std::function<Handle*(OpenAttempt&)> open, std::function<void(Handle*)> close,
                int period_ms = 200)
       : name_(std::move(name)), open_(std::move(open)), close_(std::move(close)), period_ms_(period_ms),
-        thread_([this] { run(); }) {}
+        thread_([this] {
+          pthread_setname_np(pthread_self(), "hapfluid-reopen");
+          run();
+        }) {}
 
   ReopenWorker(const ReopenWorker&) = delete;
   ReopenWorker& operator=(const ReopenWorker&) = delete;
@@ -42,7 +46,7 @@ class ReopenWorker {
     close_if(fresh_.exchange(nullptr));
   }
 
-  // Loop thread: `dead` (may be null) is closed by the worker, which then reopens until it succeeds.
+  // The user: `dead` (may be null) is closed by the worker, which then reopens until it succeeds.
   void retire(Handle* dead) {
     retired_.store(dead);
     int idle = kIdle;
@@ -58,7 +62,7 @@ class ReopenWorker {
     return h;
   }
 
-  // Loop thread: the reopened handle, once (then the worker idles until the next retire()).
+  // The user: the reopened handle, once (then the worker idles until the next retire()).
   Handle* take() { return fresh_.exchange(nullptr); }
 
   // Whether the worker is still trying (for reports; not needed to use it).

@@ -1,6 +1,9 @@
 // A transport moves wire units (CAN frames, HID reports, USB bulk packets) between a host and a
 // device without knowing what they mean. The 1 kHz loop calls send/receive only: both are
-// non-blocking and allocation-free. Opening a transport may block, allocate and throw.
+// non-blocking and allocation-free. A transport whose device I/O may block or lock (hidapi,
+// libusb) does it on threads of its own and hands frames over wait-free (frame_handoff.hpp);
+// the socket transports' non-blocking system calls are the loop's only device I/O. Opening a
+// transport may block, allocate and throw.
 #pragma once
 
 #include <cstdint>
@@ -47,11 +50,9 @@ class Transport {
   // File descriptor that becomes readable when receive() may return data; -1 if none. For
   // non-real-time users (the fake device, open-time handshakes) that wait with poll().
   virtual int poll_fd() const = 0;
-  // Services asynchronous I/O without blocking (libusb); a no-op for socket transports.
-  virtual void service() {}
   virtual std::uint32_t error_flags() const = 0;
   virtual void clear_error_flags() = 0;
-  // How many times the transport re-established a lost link by itself (loopback, libusb). A
+  // How many times the transport re-established a lost link by itself (all but the fake device's). A
   // driver restarts its sequence tracking when this changes: the device's counters moved on, or
   // restarted, while the link was down.
   virtual std::uint32_t reconnects() const { return 0; }

@@ -10,7 +10,8 @@
 //   streaming --device gone (NO_DEVICE, failed submit)--> lost --quiescent + new connection--> streaming
 //   streaming / lost --destructor--> closing (terminal)
 //
-// No allocation, no locks: every call runs in the thread that handles libusb's events.
+// No allocation, no locks: every call runs in the thread that handles libusb's events (the
+// transport's I/O thread).
 #pragma once
 
 #include <array>
@@ -21,7 +22,11 @@ namespace hapfluid::device {
 class UsbTransferBook {
  public:
   static constexpr int kIn = 4;   // IN transfers kept submitted (protocol.md 4.5)
-  static constexpr int kOut = 8;  // OUT transfers in flight at most
+  // OUT transfers in flight at most. One: a device that falls behind takes the newest command
+  // the transport's hand-off kept (frame_handoff.hpp) as soon as it takes the one in flight, not
+  // a queue of older ones in the kernel. The next is submitted from the completion, so a device
+  // that keeps up still gets every frame.
+  static constexpr int kOut = 1;
 
   enum class Phase : std::uint8_t { streaming, lost, closing };
   // A finished transfer's outcome (from libusb_transfer_status; `failed` = error, timeout, stall, overflow).

@@ -1,6 +1,7 @@
-/* Deterministic random-input driver for the decoders (the gcc build's stand-in for libFuzzer):
- * random bytes, and valid packets and frame sets with random bit flips, truncations and
- * extensions, so inputs reach past the CRC check. Usage: random_inputs [iterations] */
+/* Deterministic random-input driver for the decoders (a ctest of the normal build; make fuzz
+ * runs the libFuzzer targets of wire_decoders.c): random bytes, and valid packets and frame sets
+ * with random bit flips, truncations and extensions, so inputs reach past the CRC check.
+ * Usage: random_inputs [iterations] */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -51,36 +52,7 @@ static hf_message random_message(void) {
   return m;
 }
 
-/* Seed corpus for the libFuzzer targets: valid inputs, so fuzzing starts past the CRC checks. */
-static int write_seeds(const char* dir, const char* target) {
-  for (int k = 0; k < 32; ++k) {
-    uint8_t buf[96];
-    size_t n = 0;
-    hf_message m = random_message();
-    if (strcmp(target, "can") == 0) {
-      hf_can_frame frames[HF_CAN_MAX_FRAMES];
-      int count = hf_can_encode(&m, 3, frames);
-      for (int f = 0; f < count; ++f, n += 11) {
-        buf[n] = (uint8_t)frames[f].id; buf[n + 1] = (uint8_t)(frames[f].id >> 8); buf[n + 2] = frames[f].dlc;
-        memcpy(buf + n + 3, frames[f].data, 8);
-      }
-    } else {
-      size_t at = strcmp(target, "canfd") == 0 ? 3 : 0;
-      uint32_t id = hf_canfd_id(m.type, 3);
-      buf[0] = (uint8_t)id; buf[1] = (uint8_t)(id >> 8); buf[2] = 3;
-      n = at + (size_t)hf_encode_packet(&m, buf + at, sizeof buf - at);
-    }
-    char path[512];
-    snprintf(path, sizeof path, "%s/seed_%02d", dir, k);
-    FILE* f = fopen(path, "wb");
-    if (!f || fwrite(buf, 1, n, f) != n) { perror(path); return 1; }
-    fclose(f);
-  }
-  return 0;
-}
-
 int main(int argc, char** argv) {
-  if (argc == 4 && strcmp(argv[1], "--seeds") == 0) return write_seeds(argv[2], argv[3]);
   long iterations = argc > 1 ? atol(argv[1]) : 1000000;
   uint8_t buf[96];
   for (long it = 0; it < iterations; ++it) {
