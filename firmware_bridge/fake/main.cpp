@@ -280,11 +280,12 @@ int run(const Options& o) {
   double next_heartbeat_s = 0, next_fault_s = 0;
   bool stopped_answering_logged = false;
   std::uint64_t frames_bad_seen = 0;  // invalid host frames already handed to the firmware
-  // Device time from which the injected faults apply (their times count from it): the start, or
-  // the tick that saw SIGUSR1, so a test can inject at an instant it chose (the stack engaged).
-  double inject_from_s = o.inject_on_signal ? -1 : 0;
+  // The tick from which the injected faults apply (their times count from it): the start, or the
+  // tick that saw SIGUSR1, so a test can inject at an instant it chose (the stack engaged). Counted
+  // in whole ns like t, so "S after the signal" falls on the tick "S after the start" would.
+  std::uint64_t inject_from_ns = t0;
   bool injecting = !o.inject_on_signal;
-  double since = 0;  // device time since inject_from_s
+  double since = 0;  // device time since inject_from_ns
   auto bus_off_now = [&] {
     return injecting && o.bus_off_at_s >= 0 && since >= o.bus_off_at_s && since < o.bus_off_at_s + o.bus_off_ms * 1e-3;
   };
@@ -318,11 +319,11 @@ int run(const Options& o) {
     long state_seq_sent = -1;
     if (!injecting && g_inject) {
       injecting = true;
-      inject_from_s = t;
+      inject_from_ns = wake;
       std::fprintf(stderr, "haptic-fake-device: fault injection begins at t=%.3f s, tick_ns %llu (SIGUSR1)\n", t,
                    static_cast<unsigned long long>(wake));
     }
-    since = t - inject_from_s;
+    since = (wake - inject_from_ns) * 1e-9;
 
     // 1. receive (unless the firmware hangs or the controller is bus-off)
     firmware.begin_tick();
