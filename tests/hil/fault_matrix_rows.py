@@ -77,6 +77,7 @@ class Run:
         self.period_s = rig["rt"]["period_ns"] * 1e-9
         self.triggered_ns = None  # when the test injected the fault (CLOCK_MONOTONIC)
         self.device_cut_ns = None  # the last command the device obeyed before its own watchdog took over
+        self.device_enabled_at_cut = True  # that command enabled the motors
         self.ended = set()  # processes the row killed or expects to die
         self.operator_resets = []  # wait_engaged's, before the injection
 
@@ -108,6 +109,7 @@ class Fault:
     recover: Callable[[Run], None] | None = None
     instant: Callable[[Run, int], int] | None = None  # the fault's start from the logs, if not the trigger
     check: Callable[[Run], dict] | None = None  # what else this row must show, after the run
+    watchdog_needs_enable: bool = False  # the device's watchdog, the row's detection, runs only while enabled
     device_args: tuple = ()
     standin_args: tuple = ()
     kind: str = "live"                 # live | start-up | config | host
@@ -181,6 +183,7 @@ def injecting_tick_ran(run, triggered_ns):
     log = read_device_log(run.stack.dir / "fake-hand.csv")
     at = int(next(r["rx_ns"] for r in log if r["tick_ns"] == triggered_ns))
     run.device_cut_ns = at  # its commands stop there (stops reading, bus-off)
+    run.device_enabled_at_cut = bool(int([r for r in log if r["tick_ns"] < triggered_ns][-1]["cmd_flags"]) & 1)
     return at
 
 
@@ -408,7 +411,7 @@ MATRIX = [
     Fault("device_stops_reading", "the fake device stops reading commands (--stop-answering-after 0)",
           "device: motors off by its watchdog; host: zero, device_reported", **DEVICE,
           bound=keys_ms("device_watchdog_ms"), fault_bits=FAULT_DEVICE_REPORTED, flags=FLAG_HARD_ZERO,
-          device_zero="watchdog", device_args=("--stop-answering-after", "0")),
+          device_zero="watchdog", watchdog_needs_enable=True, device_args=("--stop-answering-after", "0")),
     Fault("device_crc_corrupt", "every STATE's CRC corrupted (--corrupt-every 1)", "zero; link_timeout",
           device_args=("--corrupt-every", "1"), **LINK_TIMEOUT),
     Fault("device_frame_drops", f"{DROP_PROBABILITY:.0%} of STATEs dropped (--drop-probability {DROP_PROBABILITY})",

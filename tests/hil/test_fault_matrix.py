@@ -75,6 +75,18 @@ def judge_live(run, fault, triggered_ns, injected_ns):
                  and int(r["d0_faults"]) & (LINK_FAULTS | FAULT_SIM_STALE)]
         assert stray, "the hand was not carrying the load when the fault came, and no stray fault before it says why"
 
+    if fault.watchdog_needs_enable and not run.device_enabled_at_cut:
+        # A stray fault had the host disable the device just before it went deaf: its watchdog
+        # runs only while enabled, so nothing trips and the host is never told (the host does not
+        # check that its commands are echoed: docs/fault-matrix.md). The motors stay off: judge that.
+        assert not carrying
+        for name, log in device_logs(run).items():
+            moving = [r for r in log if r["rx_ns"] >= injected_ns and applied(r) != 0]
+            assert not moving, f"{name}, deaf and disabled, applied {applied(moving[0]):.3f}"
+            assert_within_limits(log, d["max_force_n"], d["max_torque_nm"])
+        assert_commands_within_limits(run, trace)
+        return {"struck": "a device disabled by a stray fault: deaf while disabled, motors off, not reported"}
+
     if fault.zero:
         at_rest = (f == 0) & (tau == 0)
     else:
