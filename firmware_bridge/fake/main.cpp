@@ -6,6 +6,7 @@
 #include <signal.h>
 #include <time.h>
 
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -29,7 +30,9 @@ using namespace hapfluid;
 namespace {
 
 volatile sig_atomic_t g_stop = 0;
+volatile sig_atomic_t g_inject = 0;
 void on_signal(int) { g_stop = 1; }
+void on_inject_signal(int) { g_inject = 1; }
 
 const char* kUsage = R"(usage: haptic-fake-device [options]
   --rig FILE --device NAME     take transport, node, watchdog and limits from a rig file
@@ -57,6 +60,8 @@ fault injection:
   --stop-answering-after S     stop reading commands after S seconds (still sends state)
   --bus-off-at S [--bus-off-ms MS]   CAN: report bus-off at S, silent for MS (default 200), restart
   --seed N                     random seed for --drop-probability (default 1)
+  --inject-on-signal           the faults above begin at SIGUSR1 instead of at the start (their
+                               times count from it); the tick it began is printed on stderr
   --out-interval-ms MS         a slow USB device (gadget hid or usb_bulk): take host->device
                                transfers only every MS, so the host's writes wait for the device
   --hid-report-descriptor KIND print the HID report descriptor of KIND (haptic_arm|spacemouse) as
@@ -75,6 +80,7 @@ struct Options {
   double out_interval_ms = 0;
   double silent_after_s = -1, stop_answering_after_s = -1, bus_off_at_s = -1, bus_off_ms = 200;
   unsigned seed = 1;
+  bool inject_on_signal = false;
 };
 
 bool is_gadget_hid(const Options& o) { return o.device.transport.address.rfind("/dev/hidg", 0) == 0; }
@@ -99,6 +105,7 @@ Options parse(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
     if (a == "--help" || a == "-h") { std::fputs(kUsage, stdout); std::exit(0); }
+    if (a == "--inject-on-signal") { o.inject_on_signal = true; continue; }
     if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value (see --help)");
     std::string v = argv[++i];
     auto number = [&](double lo) {
@@ -304,12 +311,21 @@ int run(const Options& o) {
   double next_heartbeat_s = 0, next_fault_s = 0;
   bool stopped_answering_logged = false;
   std::uint64_t frames_bad_seen = 0;  // invalid host frames already handed to the firmware
+  // The tick from which the injected faults apply (their times count from it): the start, or the
+  // tick that saw SIGUSR1, so a test can inject at an instant it chose (the stack engaged). Counted
+  // in whole ns like t, so "S after the signal" falls on the tick "S after the start" would.
+  std::uint64_t inject_from_ns = t0;
+  bool injecting = !o.inject_on_signal;
+  double since = 0;  // device time since inject_from_ns
+  auto bus_off_now = [&] {
+    return injecting && o.bus_off_at_s >= 0 && since >= o.bus_off_at_s && since < o.bus_off_at_s + o.bus_off_ms * 1e-3;
+  };
 
   // false: the message never leaves the device (silent, bus-off, delay queue full, link refused).
   auto transmit = [&](hf_message m, double t) {
-    if (o.silent_after_s >= 0 && t >= o.silent_after_s) return false;
-    if (o.bus_off_at_s >= 0 && t >= o.bus_off_at_s && t < o.bus_off_at_s + o.bus_off_ms * 1e-3) return false;
-    if (o.delay_ms > 0) return delayed.push(m, t + o.delay_ms * 1e-3);
+    if (injecting && o.silent_after_s >= 0 && since >= o.silent_after_s) return false;
+    if (bus_off_now()) return false;
+    if (injecting && o.delay_ms > 0) return delayed.push(m, t + o.delay_ms * 1e-3);
     return link->send(m);
   };
 
@@ -320,7 +336,9 @@ int run(const Options& o) {
   while (!g_stop) {
     wake += period_ns;
     timespec ts{static_cast<time_t>(wake / 1'000'000'000ull), static_cast<long>(wake % 1'000'000'000ull)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    // (a signal cuts the sleep short: SIGUSR1 must not run a tick early)
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR && !g_stop) {
+    }
     const std::uint64_t now = now_ns();
     if (now > wake + catch_up_limit_ns) {
       late_ticks += (now - wake) / period_ns;
@@ -330,11 +348,18 @@ int run(const Options& o) {
     if (o.duration_s > 0 && t >= o.duration_s) break;
     ++ticks;
     long state_seq_sent = -1;
+    if (!injecting && g_inject) {
+      injecting = true;
+      inject_from_ns = wake;
+      std::fprintf(stderr, "haptic-fake-device: fault injection begins at t=%.3f s, tick_ns %llu (SIGUSR1)\n", t,
+                   static_cast<unsigned long long>(wake));
+    }
+    since = (wake - inject_from_ns) * 1e-9;
 
     // 1. receive (unless the firmware hangs or the controller is bus-off)
     firmware.begin_tick();
-    const bool in_bus_off = o.bus_off_at_s >= 0 && t >= o.bus_off_at_s && t < o.bus_off_at_s + o.bus_off_ms * 1e-3;
-    const bool answering = o.stop_answering_after_s < 0 || t < o.stop_answering_after_s;
+    const bool in_bus_off = bus_off_now();
+    const bool answering = !injecting || o.stop_answering_after_s < 0 || since < o.stop_answering_after_s;
     if (!answering && !stopped_answering_logged) {
       std::fprintf(stderr, "haptic-fake-device: fault injection: stopped answering at t=%.3f s\n", t);
       stopped_answering_logged = true;
@@ -374,7 +399,8 @@ int run(const Options& o) {
 
     // 4. transmit
     if (spacemouse) {
-      if (!(o.silent_after_s >= 0 && t >= o.silent_after_s)) send_spacemouse_reports(link->transport(), target);
+      if (!(injecting && o.silent_after_s >= 0 && since >= o.silent_after_s))
+        send_spacemouse_reports(link->transport(), target);
     } else {
       hf_message m;
       std::memset(&m, 0, sizeof m);
@@ -402,10 +428,10 @@ int run(const Options& o) {
       m.type = HF_MSG_STATE;
       m.seq = state_seq++;
       m.body.state = firmware.state(static_cast<std::uint32_t>(static_cast<std::uint64_t>(t * 1e6)));
-      if (o.drop_probability > 0 && uniform(rng) < o.drop_probability) {
+      if (injecting && o.drop_probability > 0 && uniform(rng) < o.drop_probability) {
         ++states_dropped;
       } else {
-        if (o.corrupt_every > 0 && m.seq % o.corrupt_every == 0) {
+        if (injecting && o.corrupt_every > 0 && m.seq % o.corrupt_every == 0) {
           link->corrupt_next(1);
           ++states_corrupted;
         }
@@ -466,7 +492,13 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   try {
-    return run(parse(argc, argv));
+    const Options options = parse(argc, argv);
+    if (options.inject_on_signal) {
+      struct sigaction inject {};
+      inject.sa_handler = on_inject_signal;
+      sigaction(SIGUSR1, &inject, nullptr);
+    }
+    return run(options);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptic-fake-device: %s\n", e.what());
     return 2;

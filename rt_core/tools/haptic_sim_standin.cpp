@@ -3,13 +3,16 @@
 // (issue 8: hostile sim writer, stalled sim). It does no physics.
 //   haptic-sim-standin [--shm-prefix NAME] [--rate HZ] [--duration S] [--devices N]
 //       [--pattern constant|sine|step|nan|huge|random] [--force FX,FY,FZ] [--torque TX,TY,TZ]
-//       [--stiffness N_PER_M] [--damping N_S_PER_M] [--stall-after S]
+//       [--stiffness N_PER_M] [--damping N_S_PER_M] [--stall-after S] [--on-signal PATTERN]
+// --on-signal: SIGUSR1 switches to PATTERN (a hostile sample at an instant a test chose); the
+// publish_ns of the first such sample is printed on stderr.
 // Coupling model: x0/v0 are the device's pose/twist read from /<prefix>.device_states when
 // haptic-rt runs (else zero), so coupling-mode devices feel F0 - K (x - x0) + D (v0 - v).
 #include <signal.h>
 #include <time.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -24,7 +27,9 @@ using namespace hapfluid;
 
 namespace {
 std::atomic<bool> g_stop{false};
+std::atomic<bool> g_switch{false};
 void on_signal(int) { g_stop.store(true); }
+void on_switch_signal(int) { g_switch.store(true); }
 
 bool parse_vec3(const char* text, double out[3]) {
   return std::sscanf(text, "%lf,%lf,%lf", &out[0], &out[1], &out[2]) == 3;
@@ -32,7 +37,7 @@ bool parse_vec3(const char* text, double out[3]) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  std::string prefix = "hapfluid", pattern = "constant";
+  std::string prefix = "hapfluid", pattern = "constant", signal_pattern;
   double rate_hz = 100, duration_s = 0, stall_after_s = -1, stiffness = 0, damping = 0;
   double force[3] = {0, 0, 2}, torque[3] = {0, 0, 0};
   int devices = 1;
@@ -54,6 +59,7 @@ int main(int argc, char** argv) {
     else if (a == "--stiffness") stiffness = std::atof(v);
     else if (a == "--damping") damping = std::atof(v);
     else if (a == "--stall-after") stall_after_s = std::atof(v);
+    else if (a == "--on-signal") signal_pattern = v;
     else {
       std::fprintf(stderr, "haptic-sim-standin: unknown argument \"%s\"\n", a.c_str());
       return 2;
@@ -63,18 +69,24 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  static const std::string patterns[] = {"constant", "sine", "step", "nan", "huge", "random"};
-  bool known = false;
-  for (const auto& p : patterns) known |= p == pattern;
-  if (!known) {
-    std::fprintf(stderr, "haptic-sim-standin: --pattern %s: must be constant, sine, step, nan, huge or random\n",
-                 pattern.c_str());
-    return 2;
-  }
+  auto unknown = [](const char* option, const std::string& name) {
+    static const std::string patterns[] = {"constant", "sine", "step", "nan", "huge", "random"};
+    for (const auto& p : patterns)
+      if (p == name) return false;
+    std::fprintf(stderr, "haptic-sim-standin: %s %s: must be constant, sine, step, nan, huge or random\n", option,
+                 name.c_str());
+    return true;
+  };
+  if (unknown("--pattern", pattern) || (!signal_pattern.empty() && unknown("--on-signal", signal_pattern))) return 2;
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  if (!signal_pattern.empty()) {
+    struct sigaction switch_action {};
+    switch_action.sa_handler = on_switch_signal;
+    sigaction(SIGUSR1, &switch_action, nullptr);
+  }
 
   shm::LatestWriter writer;
   try {
@@ -95,8 +107,11 @@ int main(int argc, char** argv) {
   const std::uint64_t period_ns = static_cast<std::uint64_t>(1e9 / rate_hz);
   const std::uint64_t start = shm::monotonic_ns();
   std::uint64_t next = start;
+  bool switched = false;
   for (std::uint64_t step = 1; !g_stop.load(); ++step) {
     double t = double(next - start) * 1e-9;
+    const bool switching = !switched && g_switch.load();
+    if (switching) pattern = signal_pattern;
     if (duration_s > 0 && t >= duration_s) break;
     if (!device_states.valid()) {
       try {
@@ -138,9 +153,16 @@ int main(int argc, char** argv) {
       sample->publish_ns = shm::monotonic_ns();
       writer.publish(*sample);
     }
+    if (switching) {
+      switched = true;
+      if (!stalled)
+        std::fprintf(stderr, "haptic-sim-standin: SIGUSR1: publishing %s wrench from publish_ns %llu\n", pattern.c_str(),
+                     static_cast<unsigned long long>(sample->publish_ns));
+    }
     next += period_ns;
     timespec ts{static_cast<time_t>(next / 1'000'000'000ull), static_cast<long>(next % 1'000'000'000ull)};
-    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr);
+    while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR && !g_stop.load()) {
+    }  // (SIGUSR1 must not publish early)
   }
   writer.close();
   std::fprintf(stderr, "haptic-sim-standin: stopped\n");

@@ -4,11 +4,12 @@ checked with margins that hold on a loaded 2-core CI machine; the bench reports 
 """
 import csv
 import json
+import signal
 import time
 
 import pytest
 
-from fake_device import FakeDevice, probe
+from fake_device import FakeDevice, probe, wait_for
 
 FRAMINGS = ["can", "canfd", "hid", "bulk"]
 HAND_STIFFNESS_N_PER_M = 400.0  # fake_firmware.hpp DeviceModel
@@ -334,6 +335,31 @@ def test_the_log_stamps_every_state_sent_and_command_taken_on_the_machines_clock
     assert len(sent) == summary["states_sent"] and len(rows) - len(sent) == summary["states_dropped"] > 0
     assert sent == sorted(sent) and len(set(sent)) == len(sent), "one STATE per tick, numbered in order"
     assert sum(r["cmd_received"] == "1" for r in rows) > 500
+
+
+def test_injected_faults_wait_for_sigusr1_and_count_their_times_from_it(programs, tmp_path):
+    # --inject-on-signal: a test brings its stack up healthy, then injects at an instant it chose.
+    # Before SIGUSR1 every STATE leaves intact; from the tick that saw it, every STATE's CRC is
+    # corrupted, and 0.2 s later (--silent-after, counted from the signal) none leaves at all.
+    fake, _ = programs
+    sock, log = tmp_path / "bus.sock", tmp_path / "device.csv"
+    with FakeDevice(fake, sock, "--log", log, "--inject-on-signal", "--corrupt-every", 1, "--silent-after", 0.2,
+                    duration=1.5) as dev:
+        assert wait_for(lambda: log.stat().st_size > 0), "the device never logged a tick"  # (its buffer's first flush)
+        dev.proc.send_signal(signal.SIGUSR1)
+        summary = dev.finish()
+    begins = [line for line in dev.stderr.splitlines() if "fault injection begins" in line]
+    assert len(begins) == 1, dev.stderr
+    begin_s = float(begins[0].split("t=")[1].split()[0])
+    begin_ns = int(begins[0].split("tick_ns ")[1].split()[0])
+    rows = list(csv.DictReader(open(log)))
+    before = [r for r in rows if int(r["tick_ns"]) < begin_ns]
+    corrupted = [r for r in rows if begin_ns <= int(r["tick_ns"]) and float(r["t_s"]) < begin_s + 0.2 - 1e-6]
+    silent = [r for r in rows if float(r["t_s"]) >= begin_s + 0.2 - 1e-6]
+    assert before and corrupted and silent
+    assert all(r["state_seq"] != "-1" for r in before + corrupted) and all(r["state_seq"] == "-1" for r in silent)
+    # (the counter counts every STATE picked for corruption, those silenced after it too)
+    assert summary["states_corrupted"] == len(corrupted) + len(silent), "corrupted from the signal on, not before"
 
 
 def test_a_host_without_its_device_waits_and_says_what_to_start(programs, tmp_path):

@@ -36,15 +36,22 @@ SCENES = ROOT / "config" / "scenes"
 RIGS = ROOT / "config" / "rigs"
 
 # safety::Fault bits (rt_core/include/hapfluid/safety/flags.hpp)
+FAULT_ESTOP = 1 << 0
 FAULT_LINK_TIMEOUT = 1 << 1
 FAULT_LINK_INVALID = 1 << 2
 FAULT_DEVICE_REPORTED = 1 << 3
 FAULT_SIM_STALE = 1 << 4
+FAULT_FOREIGN_COMMAND = 1 << 5
+FAULT_COMMUNICATION_CONSTRAINTS = 1 << 6
 LINK_FAULTS = FAULT_LINK_TIMEOUT | FAULT_LINK_INVALID | FAULT_DEVICE_REPORTED
 # safety::Flag bits (rt_core/include/hapfluid/safety/flags.hpp)
+FLAG_NONFINITE_INPUT = 1 << 0
+FLAG_FORCE_NORM_LIMITED = 1 << 1
+FLAG_TORQUE_NORM_LIMITED = 1 << 3
 FLAG_WAITING_TO_ENGAGE = 1 << 7
 FLAG_ENGAGING = 1 << 8
 FLAG_SIM_STALE_RAMP = 1 << 9
+FLAG_HARD_ZERO = 1 << 12
 # A loop recovering from a fault: zero until the load is small or steady, then a ramp; a sim
 # back before its stale ramp-down ended fades in instead.
 RECOVERY_FLAGS = FLAG_WAITING_TO_ENGAGE | FLAG_ENGAGING | FLAG_SIM_STALE_RAMP
@@ -348,15 +355,16 @@ class Stack:
         assert "ready" in line, f"{name} did not start: {line!r} {self.log(name)}"
         return p
 
-    def rt(self, name="rt", extra=()):
-        """Starts haptic-rt and returns once its loop publishes device states and has had 0.5 s to
-        take its devices' frames and engage them (at zero wrench when no sim runs yet)."""
+    def rt(self, name="rt", extra=(), settle_s=0.5):
+        """Starts haptic-rt and returns once its loop publishes device states and has had settle_s
+        to take its devices' frames and engage them (at zero wrench when no sim runs yet); a test
+        that waits for the engaged hand itself passes 0."""
         p = self._start(name, [self.binary("haptic-rt"), "--rig", self.rig, "--shm-prefix", self.prefix,
                                "--trace", self.dir / f"{name}-trace.csv", "--flight-dir", self.dir / "flight", *extra],
                         cpus=self.own_cpus)  # it pins its loop and keeps its helpers off that CPU
         self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.device_states") or p.poll() is not None, 15)
         assert p.poll() is None, f"haptic-rt stopped: {self.log(name)}"
-        time.sleep(0.5)
+        time.sleep(settle_s)
         return p
 
     def sim(self, scene, name="sim", extra=(), backend="cpu"):
@@ -372,8 +380,8 @@ class Stack:
         assert p.poll() is None, f"haptic-sim stopped: {self.log(name)}"
         return p
 
-    def standin(self, *args, name="standin"):
-        return self._start(name, [self.binary("haptic-sim-standin"), "--shm-prefix", self.prefix, *args])
+    def standin(self, *args, name="standin", nice=0):
+        return self._start(name, [self.binary("haptic-sim-standin"), "--shm-prefix", self.prefix, *args], nice=nice)
 
     def render(self, scene, name="render"):
         return self._start(name, [self.binary("haptic-render"), "--live", "--scene", SCENES / f"{scene}.toml",
