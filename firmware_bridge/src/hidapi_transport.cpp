@@ -261,7 +261,8 @@ class HidapiTransport final : public HandoffTransport {
         discard_unsent();
       }
       if (stopping) return;
-      nap_ns(kSendPickupNs);
+      // No device: nothing to pick up soon, so no need to wake 4000 times a second for it.
+      nap_ns(writer_connection_.load() ? kSendPickupNs : 10'000'000);
     }
   }
 

@@ -264,7 +264,9 @@ def _inside_the_loop(calls) -> list[tuple[str, str]]:
     device's start-up handshake sleeps too)."""
     start = max(i for i, (name, args) in enumerate(calls) if name == "write" and "loop thread tid" in args)
     sleeps = [i for i, (name, _) in enumerate(calls) if name == "clock_nanosleep" and i > start]
-    assert len(sleeps) > 500, "the loop ran under strace"
+    # (strace stops every thread at each of their calls: how many of its 1000 periods the loop
+    # gets through then is the machine's; a hundred wakes are plenty to judge what it calls)
+    assert len(sleeps) > 100, "the loop ran under strace"
     return calls[sleeps[0]:sleeps[-1] + 1]
 
 
@@ -313,7 +315,7 @@ def test_a_usb_device_absent_at_start_is_a_link_fault_searched_for_off_the_loop_
     hint = "device 'right' (hid 1209:4846) is not connected: waiting for it (is it powered and plugged in?)"
     assert result.stderr.count(hint) == 1, result.stderr
     rows = read_trace(tmp_path / "trace.csv")
-    assert len(rows) > 500
+    assert len(rows) > 100  # (under strace: see _inside_the_loop)
     assert all(int(r["d0_faults"]) & FAULT_LINK_TIMEOUT and norm(force(r)) == 0 for r in rows)
     tid = int(re.search(r"loop thread tid (\d+)", result.stderr).group(1))
     threads = _syscalls_by_thread(out)
