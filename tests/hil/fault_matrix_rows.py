@@ -167,7 +167,10 @@ def shrink_sim_segment(run):
 
 
 def rt_says_corrupt(run):
-    assert "sim_samples: corrupt" in run.stack.log("rt"), run.stack.log("rt")[-1500:]
+    log = run.stack.log("rt")
+    assert "sim_samples: corrupt" in log, log[-1500:]
+    said = [line for line in log.splitlines() if "sim_samples" in line]
+    assert len(said) == len(set(said)), f"the corrupt segment is said again and again: {said[-4:]}"
     return {}
 
 

@@ -134,13 +134,15 @@ void Supervisor::manage_sim() {
     std::fprintf(stderr, "haptic-rt: sim_samples: attached %s (writer pid %d)\n",
                  attachment->reader.segment().name().c_str(), attachment->reader.segment().layout().writer_pid);
     last_sim_message_.clear();
+    last_attach_error_.clear();
     loop_.offer_sim(attachment.get());
     sim_retired_ = std::move(sim_current_);
     sim_current_ = std::move(attachment);
   } catch (const shm::ShmError& e) {
-    if (last_sim_message_ != e.what()) {
+    // Said once per cause: a corrupt segment left in /dev/shm fails every check (20 Hz).
+    if (last_attach_error_ != e.what()) {
       std::fprintf(stderr, "haptic-rt: %s\n", e.what());
-      last_sim_message_ = e.what();
+      last_attach_error_ = e.what();
     }
   }
 }

@@ -49,7 +49,8 @@ class Supervisor {
   std::unique_ptr<SimAttachment> sim_current_, sim_retired_;
   std::uint64_t sim_epoch_ = 0;
   std::uint64_t next_sim_check_ns_ = 0;
-  std::string last_sim_message_;
+  std::string last_sim_message_;   // the writer's status last said
+  std::string last_attach_error_;  // why attaching failed, last said
 
   bool ready_sent_ = false;
   std::uint64_t last_ping_ns_ = 0, last_ping_tick_ = 0;
