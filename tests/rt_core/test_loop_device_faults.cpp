@@ -3,6 +3,9 @@
 // once frames flow again, always with enable off; every other fault stays latched (issue 8).
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <thread>
+
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/loop.hpp"
 #include "hapfluid/wire/codec.h"
@@ -144,11 +147,17 @@ TEST(LoopDeviceFaults, AForeignCommandLatchesTheDeviceAtZeroUntilTheOperatorRese
 TEST(LoopDeviceFaults, CommandsTheDeviceNeverAppliedCountTowardTheCommunicationConstraint) {
   // The driver counts the commands the device's echo skipped; the loop hands each tick's new
   // ones to the safety layer, which latches the fault beyond 50 (rig default) until the reset.
+  // Only commands that enabled the motors count: the device is engaged first (the loop's link
+  // recovery runs on the real clock: ticks 1 ms apart until it enables, 2 s at most).
   LoopWithOneDevice l;
   auto violated = [&] {
     return (l.loop->last_trace().devices[0].faults & safety::fault_communication_constraints) != 0;
   };
-  l.ticks(3);
+  for (int i = 0; i < 2000 && !l.device->last.enable; ++i) {
+    l.ticks(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(l.device->last.enable) << safety::fault_names(l.loop->last_trace().devices[0].faults);
   ASSERT_FALSE(violated());
   l.device->lost += 30;
   l.ticks(1);

@@ -338,6 +338,23 @@ TEST(SafetyLayer, LosingCommandsInBulkLatchesTheCommunicationConstraintUntilTheO
   EXPECT_NEAR(out.wrench.force_n.x, 0.5, 1e-9);
 }
 
+TEST(SafetyLayer, CommandsLostWhileTheMotorsWereOffAreNoViolation) {
+  // A link fault disables the device; the commands of that time are zeros that keep its motors
+  // off, and a device catching up after a stall applies only the newest of them. Losing them
+  // loses the hand nothing: no communication constraint, and the hand gets its wrench back.
+  Harness h;
+  SafetyOutput out = h.settle({{0.5, 0, 0}, {}});
+  ASSERT_GT(out.wrench.force_n.x, 0.4);
+  for (int i = 0; i < 10; ++i) out = h.tick({{0.5, 0, 0}, {}}, /*fresh_frame=*/false);
+  ASSERT_TRUE(out.faults & fault_link_timeout);
+  for (int i = 0; i < 90; ++i) out = tick_losing(h, 5);  // 450 lost, still within link_recover_ms
+  EXPECT_FALSE(out.enable);
+  EXPECT_FALSE(out.faults & fault_communication_constraints);
+  for (int i = 0; i < 400; ++i) out = tick_losing(h, 0);
+  EXPECT_FALSE(out.faults);
+  EXPECT_NEAR(out.wrench.force_n.x, 0.5, 1e-9);
+}
+
 TEST(SafetyLayer, LosingCommandsNowAndThenOrInOneStallIsNoViolation) {
   // A device tick that takes two commands loses one; a 40 ms device stall supersedes 40 at once;
   // half the commands lost for a second is still within the constraint. None of these fault.

@@ -102,9 +102,11 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   if (estop_latched_) faults_ |= fault_estop;
   if (in.foreign_command) faults_ |= fault_foreign_command;
   // Communication constraint: a link that loses commands now and then (a device tick that took
-  // two) is fine; one that loses them in bulk renders a wrench the hand does not get.
+  // two) is fine; one that loses them in bulk renders a wrench the hand does not get. Commands
+  // that kept the motors off lose the hand nothing (a device that caught up after a stall at
+  // start-up applies only the newest), so only losses while enabled count.
   lost_bucket_ = std::max(0.0, lost_bucket_ - dt_ms * config_.max_lost_commands / config_.lost_command_window_ms);
-  lost_bucket_ += in.commands_lost;
+  if (enabled_) lost_bucket_ += in.commands_lost;
   if (lost_bucket_ > config_.max_lost_commands) faults_ |= fault_communication_constraints;
   update_link(checked);
 
@@ -166,6 +168,7 @@ SafetyOutput SafetyLayer::step(const SafetyInput& in) {
   previous_ = result;
   out.wrench = result;
   out.enable = !hard_zero;
+  enabled_ = out.enable;
   out.estop = estop_latched_;
   out.faults = faults_;
   return out;

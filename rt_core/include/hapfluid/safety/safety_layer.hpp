@@ -108,6 +108,7 @@ class SafetyLayer {
   bool estop_requested_ = false;
   bool estop_input_held_ = false;
   bool seen_frame_ = false;
+  bool enabled_ = false;  // the last command enabled the motors
   double lost_bucket_ = 0;         // lost commands, draining max_lost_commands per window
   std::uint64_t last_fresh_ns_ = 0;
   std::uint32_t looks_without_frame_ = 0;  // ticks since the last fresh frame
