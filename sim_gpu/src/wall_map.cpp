@@ -48,7 +48,11 @@ void WallMap::sample(float x, float y, float z, float& density_hat, float& gx, f
     const float inward = (w % 2 == 0) ? 1.0f : -1.0f;  // the normal into the fluid
     const float u = (p[axis] - face[w]) * inward + offset_m;
     if (u >= h) continue;
-    const float t = std::clamp((u + h) / du, 0.0f, static_cast<float>(kTableSize - 1) - 1e-3f);
+    // NaN-safe clamp: a particle whose position went non-finite must read the table's first
+    // entry, not an index cast from NaN; the finite-state check then names it.
+    float t = (u + h) / du;
+    t = t > 0.0f ? t : 0.0f;
+    t = std::min(t, static_cast<float>(kTableSize - 1) - 1e-3f);
     const int i = static_cast<int>(t);
     const float f = t - static_cast<float>(i);
     share[n] = this->share[i] + f * (this->share[i + 1] - this->share[i]);

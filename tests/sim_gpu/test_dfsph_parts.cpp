@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cubic_kernel.hpp"
@@ -97,6 +98,23 @@ TEST(WallMap, FirstLatticeLayerAtAFloorIsAtRest) {
   walls.sample(xi, yi, -static_cast<float>(0.5 * s), inside, g0, g1, g2);
   EXPECT_GT(inside, 0.5f);
   EXPECT_LT(g2, 0.0f);  // the gradient points into the wall
+}
+
+// A particle whose state went non-finite (a solve that diverged) must not make the map read
+// outside its tables: the step survives to the finite-state check, which names the particle.
+TEST(WallMap, ANonFinitePositionReadsNoEntryOutsideTheTables) {
+  const double s = 0.01, h = 0.02;
+  const CubicKernel k = make_cubic_kernel(h, cubic_lattice_gradient_moment(s, h));
+  const float lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+  const bool all[3] = {true, true, true};
+  const WallMap walls = make_wall_map(lo, hi, all, all, k, s);
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  for (float bad : {nan, inf, -inf}) {
+    float share = 0, gx = 0, gy = 0, gz = 0;
+    walls.sample(bad, 0.5f * static_cast<float>(s), bad, share, gx, gy, gz);
+    EXPECT_GE(share, 0.0f) << bad;  // NaN compares false: a finite, in-range share
+    EXPECT_LE(share, 1.0f) << bad;
+  }
 }
 
 // fluid.solver picks the method a CPU run steps with.
