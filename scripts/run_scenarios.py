@@ -5,7 +5,8 @@ with its figure and its qualitative result checked (scenario_checks.py):
 
     stirring   fig. 8   spoon_stirring                  the force opposes the stroke (mean F_x v_x < 0)
     pouring    fig. 9   bowl_pouring (two devices)      the vertical load moves from the bowl's hand to the pan's
-    glass      fig. 10  spinning_glass_{2,10,20,40}     the spin-axis torque grows with the container's viscosity
+    glass      fig. 10  spinning_glass_{2,10,20,40}     the spin-axis torque at start and stop grows with the
+                                                        container's viscosity; the steady spin costs ~nothing
     bucket     fig. 11  bucket_bimanual (two devices)   both hands share the bucket's weight while it is level
     crepe      §6.5     crepe (two devices)             the batter's weight moves to the pan and stays while spread
 

@@ -10,7 +10,8 @@ same scene time, only with less simulated time in it.
                      (the device's log: what the hand felt, and its own position)
   pouring   fig. 9   the vertical load moves from the bowl's hand to the pan's: level before the tilt
                      against level after the bowl is back
-  glass     fig. 10  the torque about the spin axis during the spin grows with the container's viscosity
+  glass     fig. 10  the torque about the spin axis while the glass starts and stops grows with the
+                     container's viscosity; in the steady spin the fluid co-rotates and the torque dies out
   bucket    fig. 11  both hands carry a comparable share of the weight while the bucket is level
   crepe     §6.5     as pouring (fig. 12: "the weight shifting between his hands as the batter goes from
                      the bowl to the pan"), and the batter stays in the pan while it is spread
@@ -33,6 +34,8 @@ import numpy as np
 GRAVITY_M_S2 = 9.81
 BATCH_DIR = "batch"  # run_scenarios.py's batch run of the same scene, beside a live run's sim/
 MIN_WINDOW_S = 0.3  # a window with less than this much data cannot be judged
+STEADY_AFTER_S = 1.0  # glass: the spin-up has diffused through the fluid (R^2 / nu = 0.8 s at 2 Pa·s)
+STEADY_FRACTION = 0.05  # glass: the steady spin's torque against the start ramp's
 
 
 @dataclass
@@ -175,30 +178,53 @@ def crepe(run: Run) -> Verdict:
     return Verdict(kept, text, numbers)
 
 
-def spin_torque_nm(run: Run) -> float:
-    """Mean |torque about the spin axis| on the hand while the glass spins at full speed."""
+def spin_phase_torques_nm(run: Run) -> dict:
+    """Mean torque about the spin axis on the hand (its magnitude) while the glass speeds up (the
+    start ramp), while it slows down (the stop ramp), and in the steady spin once the spin-up
+    has diffused through the fluid (STEADY_AFTER_S after the start ramp)."""
     spin = next(m for m in run.motions("hand") if m["kind"] == "spin")
     axis = np.array(spin["axis"], dtype=float) / np.linalg.norm(spin["axis"])
     data = run.couplings("hand")
-    data["spin_axis_torque"] = np.abs(axis[0] * data["tx"] + axis[1] * data["ty"] + axis[2] * data["tz"])
-    start, stop = spin["start_s"] + spin.get("ramp_s", 0.0), spin["stop_s"] - spin.get("ramp_s", 0.0)
-    return window_mean(data, "spin_axis_torque", start, stop, f"{run.folder.name} spin")
+    data["spin_axis_torque"] = axis[0] * data["tx"] + axis[1] * data["ty"] + axis[2] * data["tz"]
+    ramp = spin.get("ramp_s", 0.0)
+    start, stop = spin["start_s"], spin["stop_s"]
+    name = run.folder.name
+    return {
+        "start": abs(window_mean(data, "spin_axis_torque", start, start + ramp, f"{name} start ramp")),
+        "stop": abs(window_mean(data, "spin_axis_torque", stop - ramp, stop, f"{name} stop ramp")),
+        "steady": abs(window_mean(data, "spin_axis_torque", start + ramp + STEADY_AFTER_S, stop - ramp,
+                                  f"{name} steady spin")),
+    }
 
 
 def glass(runs: list[Run]) -> Verdict:
-    """Torque grows with the container's viscosity (fig. 10): strictly, 2 < 10 < 20 < 40 Pa·s, each
-    step by more than 10%. That is what holds on the batch runs (the scripted spin in simulated
-    time): 6.2 < 9.7 < 13.8 < 21.9 mN·m, steps of x1.4-1.6. The live runs at real-time factor
-    0.1-0.2 do not show it (the spring between hand and glass winds up as the sim lags: +-1.5 N·m)."""
+    """Fig. 10: the more viscous the container, the harder it drags the fluid along, so the torque
+    on the hand while the glass starts and while it stops grows with the container's viscosity
+    (strictly, 2 < 10 < 20 < 40 Pa·s). The glass's own inertia takes most of a ramp's torque and
+    the fluid's share grows by 4-13 % per step (22.2 < 22.6 < 22.7 < 22.9 mN·m at the start in
+    the batch runs), so no margin is asked. In the steady spin the fluid turns with its glass
+    as a rigid body: no shear, no torque. Its mean stays below STEADY_FRACTION of the start
+    ramp's; a fluid driven faster than its container (a boundary term that is not zero for a
+    rigid rotation) would keep the hand paying there."""
     viscosity = [float(r.scene["bodies"][0]["viscosity_pa_s"]) for r in runs]
     order = np.argsort(viscosity)
     viscosity = [viscosity[i] for i in order]
-    torque = [spin_torque_nm(runs[i]) for i in order]
-    holds = all(b > 1.1 * a for a, b in zip(torque, torque[1:]))
-    pairs = ", ".join(f"{v:g} Pa·s {t * 1e3:.1f} mN·m" for v, t in zip(viscosity, torque))
-    text = (f"mean |torque about the spin axis| while spinning: {pairs}: "
-            + ("grows" if holds else "does NOT grow") + " with the container's viscosity (each step > +10%)")
-    return Verdict(holds, text, {"viscosity_pa_s": viscosity, "spin_torque_nm": [round(t, 5) for t in torque]})
+    phases = [spin_phase_torques_nm(runs[i]) for i in order]
+    start = [p["start"] for p in phases]
+    stop = [p["stop"] for p in phases]
+    steady = [p["steady"] for p in phases]
+    grows = all(b > a for a, b in zip(start, start[1:])) and all(b > a for a, b in zip(stop, stop[1:]))
+    corotates = all(s < STEADY_FRACTION * a for s, a in zip(steady, start))
+    holds = grows and corotates
+    pairs = ", ".join(f"{v:g} Pa·s {a * 1e3:.2f}/{b * 1e3:.2f}/{c * 1e3:.3f}" for v, a, b, c in
+                      zip(viscosity, start, stop, steady))
+    text = (f"mean |torque about the spin axis| start/stop/steady, mN·m: {pairs}: "
+            + ("grows" if grows else "does NOT grow") + " with the container's viscosity at start and stop; "
+            + (f"the steady spin costs < {STEADY_FRACTION:.0%} of the start" if corotates
+               else f"the steady spin keeps >= {STEADY_FRACTION:.0%} of the start's torque: the fluid does NOT co-rotate"))
+    numbers = {"viscosity_pa_s": viscosity, "start_torque_nm": [round(t, 6) for t in start],
+               "stop_torque_nm": [round(t, 6) for t in stop], "steady_torque_nm": [round(t, 6) for t in steady]}
+    return Verdict(holds, text, numbers)
 
 
 def bucket(run: Run) -> Verdict:
