@@ -146,7 +146,17 @@ Pose read_pose(Reader& r, const char* position_key, const char* orientation_key,
 Body read_body(Reader& r, const std::filesystem::path& scene_dir, const Scene& scene) {
   Body b;
   if (auto name = r.required_string("name")) b.name = *name;
-  auto mesh = r.required_string("mesh");
+  b.shape = r.choice<BodyShape>("shape", BodyShape::mesh, {{"mesh", BodyShape::mesh}, {"particle", BodyShape::particle}});
+  const bool particle = b.shape == BodyShape::particle;
+  std::optional<std::string> mesh;
+  if (!particle) {
+    mesh = r.required_string("mesh");
+  } else {
+    // One particle of the fluid's size: nothing to sample, scale or turn.
+    if (r.has("mesh")) r.string("mesh", "");  // said once, below, not again as an unknown key
+    for (const char* key : {"mesh", "scale", "sampling_spacing_m", "orientation"})
+      if (r.has(key)) r.problem(key, "a particle body has no mesh: remove it (shape = \"particle\")");
+  }
   b.scale = r.number("scale", 1.0);
   r.check("scale", b.scale > 0, "must be > 0");
   b.pose = read_pose(r, "position_m", "orientation", true);
@@ -162,6 +172,14 @@ Body read_body(Reader& r, const std::filesystem::path& scene_dir, const Scene& s
   if (r.has("density_kg_m3") && r.has("mass_kg")) r.problem("mass_kg", "give either density_kg_m3 or mass_kg, not both");
   if (b.dynamic && !r.has("density_kg_m3") && !r.has("mass_kg"))
     r.problem("density_kg_m3", "missing (a dynamic body needs density_kg_m3 or mass_kg)");
+  if (particle) {
+    r.check("dynamic", b.dynamic, "a particle body is a device's probe: it must be dynamic");
+    const Aabb& domain = scene.domain.box;
+    if (ordered(domain))
+      r.check("position_m", inside(Aabb{b.pose.position_m, b.pose.position_m}, domain, 1e-9),
+              "particle outside the domain: " + fmt(b.pose.position_m) + " must lie inside " + fmt(domain.min_m) + ".." +
+                  fmt(domain.max_m));
+  }
 
   if (mesh) {
     b.mesh = std::filesystem::path(*mesh).is_absolute() ? std::filesystem::path(*mesh) : scene_dir / *mesh;
@@ -282,6 +300,24 @@ Coupling read_coupling(Reader& r, const Scene& scene) {
     r.check("body", b != nullptr, "coupling to a missing body \"" + c.body + "\" (no [[bodies]] entry with that name)");
     if (b) r.check("body", b->dynamic, "coupling to the static body \"" + c.body + "\": a coupled body must be dynamic");
   }
+  c.kind = r.choice<CouplingKind>("kind", CouplingKind::rigid, {{"rigid", CouplingKind::rigid}, {"probe", CouplingKind::probe}});
+  const bool probe = c.kind == CouplingKind::probe;
+  if (const Body* b = scene.find_body(c.body)) {
+    const bool particle = b->shape == BodyShape::particle;
+    if (probe && !particle)
+      r.problem("kind", "a probe holds a particle body, and \"" + c.body +
+                            "\" is a mesh: give the body shape = \"particle\", or use kind = \"rigid\"");
+    if (!probe && particle)
+      r.problem("kind", "\"" + c.body + "\" is a particle: hold it with kind = \"probe\" (forces only)");
+  }
+  if (probe) {
+    // A probe is held at its centre and renders no torque: nothing to give for the angular part.
+    for (const char* key : {"grasp_position_m", "grasp_orientation", "angular_stiffness_nm_per_rad",
+                            "angular_damping_nm_s_per_rad"})
+      if (r.has(key)) r.problem(key, "a probe renders forces only (kind = \"probe\"): remove it");
+    r.number("angular_stiffness_nm_per_rad", 0), r.number("angular_damping_nm_s_per_rad", 0);  // said above
+    c.angular_stiffness_nm_per_rad = 0, c.angular_damping_nm_s_per_rad = 0;
+  }
   c.grasp = read_pose(r, "grasp_position_m", "grasp_orientation", false);
   auto nonneg = [&](std::string_view key, double& value) {
     value = r.number(key, value);
@@ -289,8 +325,10 @@ Coupling read_coupling(Reader& r, const Scene& scene) {
   };
   nonneg("linear_stiffness_n_per_m", c.linear_stiffness_n_per_m);
   nonneg("linear_damping_n_s_per_m", c.linear_damping_n_s_per_m);
-  nonneg("angular_stiffness_nm_per_rad", c.angular_stiffness_nm_per_rad);
-  nonneg("angular_damping_nm_s_per_rad", c.angular_damping_nm_s_per_rad);
+  if (!probe) {
+    nonneg("angular_stiffness_nm_per_rad", c.angular_stiffness_nm_per_rad);
+    nonneg("angular_damping_nm_s_per_rad", c.angular_damping_nm_s_per_rad);
+  }
   r.finish();
   return c;
 }

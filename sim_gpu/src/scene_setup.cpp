@@ -54,6 +54,39 @@ void check_clear_of_walls(const config::Scene& scene, const std::string& name, c
   }
 }
 
+// A device's probe (Algorithm 1): one particle treated as a particle of the fluid, with the
+// fluid particle's volume m / rho0 (so a probe of the fluid's density is neutrally buoyant)
+// and its mass from the body's density or mass. Its inertia, that of a sphere of half a
+// spacing, only keeps the body step's 6x6 solve regular: a particle at the centre of mass
+// turns with nothing.
+RigidBody particle_body(const config::Scene& scene, const SimulationParams& p, const config::Body& cb, std::int32_t index,
+                        BodyParticles& bp) {
+  const double volume = p.fluid_particle_mass_kg / p.rest_density_kg_m3;
+  RigidBody body;
+  body.name = cb.name;
+  body.dynamic = true;
+  body.volume_m3 = volume;
+  body.viscosity_pa_s = cb.viscosity_pa_s > 0 ? cb.viscosity_pa_s : scene.fluid.viscosity_pa_s;
+  body.com_in_mesh_frame = {0, 0, 0};
+  body.orientation = Quat{};
+  body.position = from_config(cb.pose.position_m);
+  body.mass_kg = cb.mass_kg > 0 ? cb.mass_kg : cb.density_kg_m3 * volume;
+  const double radius = 0.5 * p.particle_spacing_m, moment = 0.4 * body.mass_kg * radius * radius;
+  for (int i = 0; i < 3; ++i) body.inertia_body.m[i][i] = moment;
+  body.inertia_body_inverse = inverse(body.inertia_body);
+  body.first_particle = static_cast<std::uint32_t>(bp.size());
+  body.particle_count = 1;
+  bp.resize(bp.size() + 1);
+  const std::size_t i = body.first_particle;
+  bp.rx[i] = bp.ry[i] = bp.rz[i] = 0;
+  bp.x[i] = static_cast<float>(body.position.x), bp.y[i] = static_cast<float>(body.position.y),
+  bp.z[i] = static_cast<float>(body.position.z);
+  bp.volume[i] = static_cast<float>(volume);
+  bp.viscosity[i] = static_cast<float>(body.viscosity_pa_s);
+  bp.body[i] = index;
+  return body;
+}
+
 void fill_sorted_solids(const std::vector<SolidSource>& sources, const GridGeometry& grid, SortedSolids& out) {
   std::vector<float> x, y, z, volume, viscosity, no_slip;
   std::vector<std::int32_t> body;
@@ -221,6 +254,13 @@ SimulationModel build_model(const config::Scene& scene) {
   std::vector<Vec3> all_solid_world;  // for clearing fluid off solids
   for (std::size_t bi = 0; bi < scene.bodies.size(); ++bi) {
     const config::Body& cb = scene.bodies[bi];
+    if (cb.shape == config::BodyShape::particle) {
+      model.bodies.push_back(particle_body(scene, p, cb, static_cast<std::int32_t>(bi), model.body_particles));
+      const Vec3 x = from_config(cb.pose.position_m);
+      check_clear_of_walls(scene, cb.name, {x}, s);
+      all_solid_world.push_back(x);
+      continue;
+    }
     const std::string what = scene.file.string() + ": bodies." + cb.name;
     config::TriangleMesh mesh = config::load_mesh(cb.mesh);
     check_closed_mesh(mesh, what + " (" + cb.mesh.string() + ")");
@@ -380,7 +420,10 @@ SimulationModel build_model(const config::Scene& scene) {
       if (scene.devices[i].name == c.device) vc.device = i;
     for (std::size_t i = 0; i < scene.bodies.size(); ++i)
       if (scene.bodies[i].name == c.body) vc.body = i;
-    vc.grasp_position = from_config(c.grasp.position_m);
+    // A probe is held at its particle (the body's centre): the spring pulls through the centre
+    // of mass and no torque reaches the device.
+    vc.grasp_position = c.kind == config::CouplingKind::probe ? model.bodies[vc.body].com_in_mesh_frame
+                                                              : from_config(c.grasp.position_m);
     vc.grasp_orientation = from_config(c.grasp.orientation);
     vc.linear_stiffness_n_per_m = c.linear_stiffness_n_per_m;
     vc.linear_damping_n_s_per_m = c.linear_damping_n_s_per_m;

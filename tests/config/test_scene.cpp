@@ -159,6 +159,45 @@ TEST(Scene, CouplingToAStaticBody) {
   expect_problem(text, "coupling to the static body \"spoon\"");
 }
 
+// Algorithm 1's probe: a particle body held by a probe coupling, forces only.
+const std::string kProbe = R"(
+[[bodies]]
+name = "probe"
+shape = "particle"
+position_m = [0.2, 0.15, 0.05]
+density_kg_m3 = 1000.0
+)";
+
+TEST(Scene, AProbeIsAParticleBodyHeldByAProbeCoupling) {
+  const Scene s = parse_scene(kBase + kProbe + kHand + "[[couplings]]\ndevice = \"hand\"\nbody = \"probe\"\nkind = \"probe\"\n",
+                              kScenePath);
+  ASSERT_EQ(s.bodies.size(), 1u);
+  EXPECT_EQ(s.bodies[0].shape, BodyShape::particle);
+  EXPECT_TRUE(s.bodies[0].mesh.empty());
+  ASSERT_EQ(s.couplings.size(), 1u);
+  EXPECT_EQ(s.couplings[0].kind, CouplingKind::probe);
+  EXPECT_EQ(s.couplings[0].angular_stiffness_nm_per_rad, 0.0);  // no torque to render
+  EXPECT_EQ(s.couplings[0].angular_damping_nm_s_per_rad, 0.0);
+  const Scene shipped = load_scene("config/scenes/probe_3dof.toml");
+  EXPECT_EQ(shipped.couplings.at(0).kind, CouplingKind::probe);
+}
+
+TEST(Scene, AProbeAndItsParticleAreNotMixedWithMeshesAndTorques) {
+  const std::string held = kHand + "[[couplings]]\ndevice = \"hand\"\nbody = \"probe\"\n";
+  expect_problem(kBase + kProbe + held, "couplings[0].kind: \"probe\" is a particle: hold it with kind = \"probe\"");
+  expect_problem(kBase + kSpoon + kHand + "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\nkind = \"probe\"\n",
+                 "a probe holds a particle body, and \"spoon\" is a mesh");
+  expect_problem(kBase + kProbe + held + "kind = \"probe\"\nangular_stiffness_nm_per_rad = 2.0\n",
+                 "couplings[0].angular_stiffness_nm_per_rad = 2.0: a probe renders forces only");
+  expect_problem(kBase + kProbe + "mesh = \"../meshes/spoon.obj\"\n" + held + "kind = \"probe\"\n",
+                 "bodies.probe.mesh = \"../meshes/spoon.obj\": a particle body has no mesh");
+  expect_problem(kBase + kProbe + "dynamic = false\n", "bodies.probe.dynamic = false: a particle body is a device's probe");
+  expect_problem(kBase + kProbe + held + "kind = \"ball\"\n", "couplings[0].kind = \"ball\": must be one of \"rigid\", \"probe\"");
+  std::string outside = kBase + kProbe;
+  outside.replace(outside.find("[0.2, 0.15, 0.05]"), 17, "[0.2, 0.15, 0.55]");
+  expect_problem(outside, "bodies.probe.position_m = [0.2, 0.15, 0.55]: particle outside the domain");
+}
+
 TEST(Scene, DynamicBodyNeedsDensityOrMass) {
   std::string text = kBase + kSpoon;
   text.replace(text.find("density_kg_m3 = 700.0\n"), 22, "");

@@ -629,6 +629,99 @@ cfl = 0.2
   std::filesystem::remove_all(dir);
 }
 
+namespace {
+
+// A pool 8 layers deep with a device's probe (Algorithm 1) 3.5 cm under its surface; `motion`
+// is the device's [[devices.motion]] table, if any; `fluid` the solver keys.
+config::Scene probe_scene(const std::filesystem::path& dir, const std::string& fluid, const std::string& motion,
+                          bool pool = true) {
+  return test::write_scene(dir, "name = \"probe\"\n" + domain(0, 0, 0, 0.20, 0.12, 0.16) + R"(
+[fluid]
+particle_spacing_m = 0.01
+viscosity_pa_s = 2.0
+)" + fluid + (pool ? R"(
+[[fluid.blocks]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.20, 0.12, 0.08]
+)" : "") + R"(
+[[bodies]]
+name = "probe"
+shape = "particle"
+position_m = [0.10, 0.06, 0.045]
+density_kg_m3 = 1000.0
+[[devices]]
+name = "hand"
+start_position_m = [0.10, 0.06, 0.045]
+)" + motion + R"(
+[[couplings]]
+device = "hand"
+body = "probe"
+kind = "probe"
+linear_stiffness_n_per_m = 50.0
+linear_damping_n_s_per_m = 0.5
+)");
+}
+
+}  // namespace
+
+TEST(Probe, AHeldProbeInAirRendersItsWeightAndNoTorque) {
+  // No fluid: the probe (a fluid particle's volume m / rho0 at the fluid's density, so a fluid
+  // particle's mass, ~1 g at 1 cm) hangs in the coupling spring, and the device feels exactly
+  // its weight, straight down, and never a torque.
+  const auto dir = test::temp_dir("probe_air");
+  const auto solver = make_cpu_solver(build_model(probe_scene(dir, "speed_of_sound_m_s = 10.0\n", "", false)), 1);
+  ASSERT_EQ(solver->model().bodies.size(), 1u);
+  ASSERT_EQ(solver->model().bodies[0].particle_count, 1u);
+  const double mass = solver->model().bodies[0].mass_kg;
+  EXPECT_NEAR(mass, solver->params().fluid_particle_mass_kg, 1e-6 * mass);  // (params hold it in float)
+  for (int k = 0; k < 100; ++k) {
+    solver->advance(0.01);
+    EXPECT_EQ(norm(solver->model().couplings[0].device_torque), 0.0) << "step " << k;
+  }
+  const Vec3 f = solver->model().couplings[0].device_force;
+  std::cout << "held probe in air: device force " << f.x << ", " << f.y << ", " << f.z << " N\n";
+  EXPECT_NEAR(f.z, -mass * kG, 1e-3 * mass * kG);  // the weight pulls the hand down
+  EXPECT_NEAR(f.x, 0.0, 1e-9);
+  EXPECT_NEAR(f.y, 0.0, 1e-9);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Probe, StrokedThroughTheFluidItRendersForceAgainstTheStrokeAndNoTorque) {
+  // Algorithm 1 on both methods: the probe dragged back and forth by the device feels the
+  // fluid's pressure and viscosity against its motion, and the device gets forces only.
+  const std::string stroke = R"(
+[[devices.motion]]
+kind = "oscillate"
+axis = [1.0, 0.0, 0.0]
+amplitude_m = 0.04
+frequency_hz = 1.0
+)";
+  for (const std::string method : {"wcsph", "dfsph"}) {
+    const auto dir = test::temp_dir("probe_" + method);
+    const std::string fluid = method == "dfsph" ? "solver = \"dfsph\"\nsettle_s = 0.1\n[time]\nmax_dt_s = 0.005\n"
+                                                : "speed_of_sound_m_s = 10.0\n[time]\ncfl = 0.2\n";
+    const auto solver = make_cpu_solver(build_model(probe_scene(dir, fluid, stroke)), 2);
+    double power = 0, speed2 = 0;
+    bool torque_free = true;
+    const int frames = 100;  // one full stroke
+    for (int k = 0; k < frames; ++k) {
+      solver->advance(0.01, [&](double now) {
+        solver->set_device_state(0, device_state_from(config::evaluate_motion(solver->model().devices[0].motion, now)));
+        torque_free = torque_free && norm(solver->model().couplings[0].device_torque) == 0.0;
+      });
+      const RigidBody& b = solver->model().bodies[0];
+      power += b.fluid_force.x * b.linear_velocity.x / frames;
+      speed2 += b.linear_velocity.x * b.linear_velocity.x / frames;
+    }
+    std::cout << method << " probe stroke: mean fluid power on the probe " << power << " W, rms speed "
+              << std::sqrt(speed2) << " m/s\n";
+    EXPECT_GT(speed2, 0.01) << method;  // it followed the stroke (0.18 m/s rms)
+    EXPECT_LT(power, 0.0) << method << ": the fluid must resist the stroke";
+    EXPECT_TRUE(torque_free) << method << ": a probe renders forces only";
+    std::filesystem::remove_all(dir);
+  }
+}
+
 TEST(Coupling, TwoDevicesHoldingOneBarShareItsWeight) {
   // Bimanual coupling (§6.4.4): two devices hold a 0.3 m bar at its ends. At rest each device
   // feels half the bar's weight, pulling down (N).

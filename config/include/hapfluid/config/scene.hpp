@@ -89,9 +89,14 @@ struct TimeStepping {
   double frame_rate_hz = 60.0;   // published frames (and batch exports); several substeps per frame
 };
 
+// A body is a sampled mesh (§4, a rigid body of boundary particles) or a single particle
+// (§3.2, Algorithm 1: the probe of a 3-DoF device, sized like a fluid particle).
+enum class BodyShape { mesh, particle };
+
 struct Body {
   std::string name;
-  std::filesystem::path mesh;  // resolved against the scene file's folder
+  BodyShape shape = BodyShape::mesh;
+  std::filesystem::path mesh;  // resolved against the scene file's folder; empty for a particle
   double scale = 1.0;
   Pose pose;                   // pose of the mesh frame in the world
   double density_kg_m3 = 0.0;  // one of density / mass
@@ -114,9 +119,14 @@ struct SceneDevice {
   Vec3 workspace_centre_m;
 };
 
+// rigid: 6-DoF, force and torque (Algorithm 2); probe: 3-DoF, the device holds a particle body
+// at its centre and renders forces only, zero torque (Algorithm 1, lines 17-22).
+enum class CouplingKind { rigid, probe };
+
 struct Coupling {
   std::string device;
   std::string body;
+  CouplingKind kind = CouplingKind::rigid;
   Pose grasp;                  // device handle pose in the body frame (where the hand holds it)
   double linear_stiffness_n_per_m = 500.0;
   double linear_damping_n_s_per_m = 5.0;
