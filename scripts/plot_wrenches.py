@@ -52,6 +52,8 @@ class Components:
 # names or their prefix before a trailing _<number> (spinning_glass_10 -> spinning_glass).
 SCENE_COMPONENTS = {
     "spoon_stirring": Components("x", "y", "along the stroke", "across the stroke", hand_velocity=True),
+    # A 3-DoF probe renders forces only: its torque panel shows the zero the device gets.
+    "probe_3dof": Components("x", "norm", "along the stroke", "3-DoF: forces only", hand_velocity=True),
     "bowl_pouring": Components("z", "y", "vertical, - = down", "tilt axis"),
     "spinning_glass": Components("norm", "z", "", "spin axis"),
     "bucket_bimanual": Components("z", "y", "vertical, - = down", "tilt axis"),

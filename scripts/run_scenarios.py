@@ -4,6 +4,7 @@ the scripted hands, haptic-rt, haptic-sim --live, haptic-trace, cyclictest besid
 with its figure and its qualitative result checked (scenario_checks.py):
 
     stirring   fig. 8   spoon_stirring                  the force opposes the stroke (mean F_x v_x < 0)
+    probe      Alg. 1   probe_3dof                      the same for a 3-DoF probe, and no torque on the device
     pouring    fig. 9   bowl_pouring (two devices)      the vertical load moves from the bowl's hand to the pan's
     glass      fig. 10  spinning_glass_{2,10,20,40}     the spin-axis torque at start and stop grows with the
                                                         container's viscosity; the steady spin costs ~nothing
@@ -23,11 +24,11 @@ at 5x its speed and its torque says more about the machine than about the viscos
 with a live run below RT factor 0.9 (LIVE_RTF_FOR_PHYSICS) is therefore also run in batch
 (haptic-sim, the scene's scripted hands at their speed in simulated time, no wall clock): its
 figure and its check are the batch run's, the live run's figure is <figure>_live.png, and the
-table says which one was judged. Stirring is always judged live: what the hand felt against its
-own velocity, one clock, a claim any real-time factor keeps.
+table says which one was judged. Stirring and the probe are always judged live: what the hand
+felt against its own velocity, one clock, a claim any real-time factor keeps.
 
 Writes out/scenarios/<scenario>/<scene>/ (hapfluid.py run folders, batch/ beside sim/), fig8_stirring.png,
-fig9_pouring.png, fig10_spinning_glass.png, fig11_bucket.png, crepe.png and scenarios.json (per
+alg1_probe.png, fig9_pouring.png, fig10_spinning_glass.png, fig11_bucket.png, crepe.png and scenarios.json (per
 scene: sim steps/s, real-time factor, max force on the hands, loop and cyclictest wake latency;
 per scenario: the check's verdict and numbers). Exits 1 when a run fails or a result does not hold.
 """
@@ -44,6 +45,7 @@ PY = sys.executable
 
 SCENARIOS = {
     "stirring": (["spoon_stirring"], "fig8_stirring.png", "fig. 8: spoon stirring, one hand"),
+    "probe": (["probe_3dof"], "alg1_probe.png", "§3.2, Algorithm 1: a 3-DoF probe stroked through a viscous pool"),
     "pouring": (["bowl_pouring"], "fig9_pouring.png", "fig. 9: bowl to pan pouring, two hands"),
     "glass": (["spinning_glass_2", "spinning_glass_10", "spinning_glass_20", "spinning_glass_40"],
               "fig10_spinning_glass.png", "fig. 10: spinning glass of 2 Pa·s fluid, container viscosity 2/10/20/40 Pa·s"),
@@ -52,7 +54,7 @@ SCENARIOS = {
 }
 LIVE_RTF_FOR_PHYSICS = 0.9
 LEAD_IN_S = 3.0  # as hapfluid.py's default; the plots' --hand-offset
-LIVE_ONLY = {"stirring"}
+LIVE_ONLY = {"stirring", "probe"}
 SUMMARY_KEYS = ("ok", "sim_backend", "sim_steps_per_s", "real_time_factor", "sim_kept_up", "fluid_particles",
                 "max_force_on_hand_n", "wake_latency_us", "cyclictest_us", "script_offset_s")
 

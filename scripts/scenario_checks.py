@@ -8,6 +8,7 @@ same scene time, only with less simulated time in it.
 
   stirring  fig. 8   the force along the stroke opposes the hand's stroke velocity: mean F_x v_x < 0
                      (the device's log: what the hand felt, and its own position)
+  probe     Alg. 1   as stirring, for a 3-DoF probe; and no torque ever reaches the device
   pouring   fig. 9   the vertical load moves from the bowl's hand to the pan's: level before the tilt
                      against level after the bowl is back
   glass     fig. 10  the torque about the spin axis while the glass starts and stops grows with the
@@ -127,6 +128,32 @@ def stirring(run: Run) -> Verdict:
     return Verdict(power < 0, text, numbers)
 
 
+def probe(run: Run) -> Verdict:
+    """Algorithm 1: as stirring (the hand feels the fluid against its stroke), and the same of
+    the sim's own coupling force, against the hand's velocity at the sim's times: the 1 kHz
+    loop's local spring alone, held over a sample's age, also pulls against any motion, so the
+    device's log cannot tell the fluid's drag from the latency. And the 3-DoF device never gets
+    a torque: every applied torque in its log is exactly zero."""
+    against = stirring(run)
+    log = run.device_log("hand")
+    sim = run.couplings("hand")
+    start, stop = against.numbers.get("stroke_window_s", (0.0, 0.0))
+    keep = (sim["t"] >= start) & (sim["t"] <= stop)
+    if keep.sum() < 10:
+        return Verdict(False, f"{against.text}; only {int(keep.sum())} sim coupling rows in the stroke: run longer",
+                       against.numbers)
+    hand_v = np.interp(sim["t"][keep], log["t"], np.gradient(log["px"], log["t"]))
+    sim_power = float(np.mean(sim["fx"][keep] * hand_v))
+    torque = max(float(np.max(np.abs(log[k]))) for k in ("applied_tx", "applied_ty", "applied_tz"))
+    torque_free = torque == 0.0
+    text = (against.text + f"; the sim's coupling force times the hand's velocity {sim_power * 1e3:+.2f} mW: "
+            + ("the fluid resists the probe" if sim_power < 0 else "the fluid does NOT resist the probe")
+            + ("; no torque ever reached the device" if torque_free
+               else f"; a torque of {torque:.3g} N·m reached the 3-DoF device"))
+    numbers = {**against.numbers, "sim_force_times_velocity_w": round(sim_power, 6), "max_applied_torque_nm": torque}
+    return Verdict(against.holds and sim_power < 0 and torque_free, text, numbers)
+
+
 def load_shift(run: Run, giver_body: str, taker_body: str, tilt_device: str, after: tuple[float, float],
                share: float = 0.5) -> Verdict:
     """The vertical load (-F_z on the hand, N) of each hand level before the tilt and in `after`:
@@ -240,7 +267,7 @@ def bucket(run: Run) -> Verdict:
     return Verdict(holds, text, {"load_n": {d: round(f, 3) for d, f in down.items()}, "total_n": round(total, 3)})
 
 
-CHECKS = {"stirring": stirring, "pouring": pouring, "glass": glass, "bucket": bucket, "crepe": crepe}
+CHECKS = {"stirring": stirring, "probe": probe, "pouring": pouring, "glass": glass, "bucket": bucket, "crepe": crepe}
 
 
 def check(scenario: str, folders: list[pathlib.Path], batch: bool = False) -> Verdict:

@@ -54,5 +54,5 @@ def test_the_fig8_plot_is_written(stirring):
 
 def test_an_unknown_scenario_is_named_with_the_known_ones(source_dir, build_dir, tmp_path):
     result = run_scenarios(source_dir, build_dir, tmp_path, "--only", "stirring,teapot", timeout=30)
-    assert result.returncode != 0 and "teapot" in result.stderr and "stirring, pouring" in result.stderr
+    assert result.returncode != 0 and "teapot" in result.stderr and "stirring, probe, pouring" in result.stderr
     assert not (tmp_path / "scenarios.json").exists()

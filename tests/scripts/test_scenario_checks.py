@@ -40,8 +40,9 @@ def make_run(folder, source_dir, scene, wrench, end_s, device_log=None, batch=Fa
             w = ",".join(f"{v:.6f}" for v in wrench(d, t))
             lines.append(f"{t + OFFSET_S:.4f},{d},b,{w},{t + OFFSET_S:.4f},{k},{k}")
     (folder / "sim" / "couplings.csv").write_text("\n".join(lines) + "\n")
-    if device_log:
-        rows = ["t_s,px,applied_fx"] + [f"{t + LEAD_IN_S:.4f},{px:.6f},{fx:.6f}" for t, px, fx in device_log]
+    if device_log:  # (t, px, fx) or (t, px, fx, tz)
+        rows = ["t_s,px,applied_fx,applied_tx,applied_ty,applied_tz"] + [
+            f"{r[0] + LEAD_IN_S:.4f},{r[1]:.6f},{r[2]:.6f},0,0,{(r[3] if len(r) > 3 else 0.0):.6f}" for r in device_log]
         (folder / "device_hand.csv").write_text("\n".join(rows) + "\n")
     return folder
 
@@ -64,6 +65,26 @@ def test_stirring_holds_only_when_the_force_opposes_the_stroke(checks, source_di
     assert verdict.holds is holds, verdict.text
     assert ("opposes the stroke" if holds else "does NOT oppose") in verdict.text
     assert (verdict.numbers["mean_force_times_velocity_w"] < 0) is holds
+
+
+def stroke_velocity(t):
+    # stroke_log's hand velocity (0.08 m at 0.5 Hz from 1 s)
+    return 0.08 * math.pi * math.cos(math.pi * (t - 1.0)) if t > 1.0 else 0.0
+
+
+@pytest.mark.parametrize("sign, sim_sign, stray_torque, holds, says", [
+    (-1, -1, 0.0, True, "no torque ever reached"), (+1, -1, 0.0, False, "does NOT oppose"),
+    (-1, +1, 0.0, False, "the fluid does NOT resist"),  # only the loop's lagging spring resists
+    (-1, -1, 0.002, False, "reached the 3-DoF device")])
+def test_probe_holds_when_fluid_and_hand_oppose_the_stroke_and_no_torque_reaches_the_device(
+        checks, source_dir, tmp_path, sign, sim_sign, stray_torque, holds, says):
+    log = [(t, px, fx, stray_torque if 3.0 < t < 3.01 else 0.0) for t, px, fx in stroke_log(sign)]
+    sim = lambda d, t: (sim_sign * 0.01 * stroke_velocity(t), 0, 0, 0, 0, 0)  # noqa: E731
+    run = make_run(tmp_path / "run", source_dir, "probe_3dof", sim, 8.0, log)
+    verdict = checks.check("probe", [run])
+    assert verdict.holds is holds, verdict.text
+    assert says in verdict.text
+    assert verdict.numbers["max_applied_torque_nm"] == pytest.approx(stray_torque)
 
 
 def test_a_run_too_short_for_the_stroke_cannot_be_judged(checks, source_dir, tmp_path):
