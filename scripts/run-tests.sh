@@ -9,7 +9,7 @@ case "$build" in /*) ;; *) build="$here/$build" ;; esac
 cd "$here"
 
 # Every test stops its writers cleanly: a segment a test leaves in /dev/shm is a failure (a live
-# run's processes must leave nothing behind either, issue 8).
+# run's processes must leave nothing behind either).
 shm_before="$(ls /dev/shm 2>/dev/null | grep '^hapfluid' | sort)"
 
 echo "== C/C++ tests (ctest) =="

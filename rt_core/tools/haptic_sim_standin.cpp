@@ -1,6 +1,6 @@
 // haptic-sim-standin: a stand-in for haptic-sim that writes /<prefix>.sim_samples through
 // hapfluid_shm with a scripted wrench, for rt_core's multi-process tests and for fault injection
-// (issue 8: hostile sim writer, stalled sim). It does no physics.
+// (a hostile sim writer, a stalled sim). It does no physics.
 //   haptic-sim-standin [--shm-prefix NAME] [--rate HZ] [--duration S] [--devices N]
 //       [--pattern constant|sine|step|nan|huge|random] [--force FX,FY,FZ] [--torque TX,TY,TZ]
 //       [--stiffness N_PER_M] [--damping N_S_PER_M] [--stall-after S] [--on-signal PATTERN]

@@ -1,4 +1,4 @@
-// Live mode of haptic-sim (issue 8): the simulator as a service between haptic-rt and
+// Live mode of haptic-sim: the simulator as a service between haptic-rt and
 // haptic-render, over the hapfluid_shm channels (rt_core/include/hapfluid/shm/layouts.hpp).
 //
 //   device_states (haptic-rt -> sim)   device poses, scene frame

@@ -244,7 +244,7 @@ def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
     assert stats["kept_up_with_wall_clock"] is False and stats["dropped_backlog_s"] >= 0.5
 
 
-# Re-engaging under a resting load (issue 8), fake_single's engage keys: link_recover_ms 100,
+# Re-engaging under a resting load, fake_single's engage keys: link_recover_ms 100,
 # engage_hold_ms 150, engage_steady_band_n 0.5, engage_ramp_ms 200, engage_ramp_rate_n_per_s 20.
 RESTING_LOAD_N = 4.0
 CARRY_S = 0.45  # the hand carries the load this long before the fault ...

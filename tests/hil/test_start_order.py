@@ -1,4 +1,4 @@
-"""The live stack comes up, and restarts, in any order (issue 8): whichever part starts first waits
+"""The live stack comes up, and restarts, in any order: whichever part starts first waits
 for the others; nothing reaches the hand before the sim knows the device; and every order ends
 with the hand rendering the sim's wrench, within the rig's limits, with the sign the sim computed.
 Real processes over loopback (hil_stack.py), fake_single rig (max_force_n 8, max_torque_nm 0.4).

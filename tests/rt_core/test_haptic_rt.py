@@ -230,7 +230,7 @@ def test_configuration_and_device_errors_name_the_fix(binary, tmp_path):
 
 
 def test_a_device_that_is_not_there_yet_is_held_at_a_link_fault_and_named(binary, tmp_path):
-    # No device process on the rig's loopback bus (it may start later: any start order, issue 8):
+    # No device process on the rig's loopback bus (it may start later: any start order):
     # the loop runs, holds the device at a link fault with zero wrench, and says which device is
     # silent and how to bring it up. (That it takes the device up when it appears: tests/hil.)
     rig = tmp_path / "rig.toml"

@@ -1,6 +1,6 @@
 // The loop's answer to device-reported faults: a latched command-watchdog trip (the device's
 // reaction to the host's own silence, e.g. a link loss longer than device_watchdog_ms) is cleared
-// once frames flow again, always with enable off; every other fault stays latched (issue 8).
+// once frames flow again, always with enable off; every other fault stays latched.
 #include <gtest/gtest.h>
 
 #include <chrono>

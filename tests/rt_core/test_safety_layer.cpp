@@ -417,7 +417,7 @@ TEST(SafetyLayer, StalenessRampFollowsElapsedTimeWhenTicksAreSkipped) {
   }
 }
 
-// ---- Engaging under a resting load (issue 8) ---------------------------------------------------
+// ---- Engaging under a resting load ----------------------------------------------------------------
 // A hand carrying the paper's bucket (§6.4.4) holds a coupling wrench of several N for the whole
 // run. After a fault the loop must give that load back to the hand, slowly, once the command is
 // known to be a load and not a runaway; rig defaults: link_recover_ms 100, engage_hold_ms 150,

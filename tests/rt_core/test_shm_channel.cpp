@@ -1,4 +1,4 @@
-// The shared-memory contract (brief: Contracts): ownership, header validation, dead/stale/closed/
+// The shared-memory contract (docs/architecture.md, Contracts): ownership, header validation, dead/stale/closed/
 // restarted writer detection and the ring's loss accounting. Each test uses its own segment name.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -181,7 +181,7 @@ TEST(ShmChannel, ForeignSegmentIsNotMistakenForAChannel) {
 
 TEST(ShmChannel, DeadWriterIsDetectedAndItsLeftoverSegmentReplaced) {
   // A sim that crashes leaves its segment behind; readers must notice, and the next sim must be
-  // able to start without manual clean-up (issue 8: stale segment from a crashed run).
+  // able to start without manual clean-up (a stale segment from a crashed run).
   auto name = unique_name("dead");
   pid_t child = run_child([&] {
     auto writer = LatestWriter::create(name, ChannelKind::sim_samples, sizeof(Sample));

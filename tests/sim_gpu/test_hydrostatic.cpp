@@ -103,7 +103,7 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   for (int k = 0; k < snapshots; ++k) {
     test::run_for(solver, 0.03, 0.03);
     const Profile now = pressure_profile(solver, scene);
-    // Issue 3's 10% holds for every settled snapshot, not only on average (worst band of the 10
+    // The 10% holds for every settled snapshot, not only on average (worst band of the 10
     // snapshots measured 5.1% on the CPU, 4.7% on Vulkan; time-averaged 4.2% and 3.5%).
     for (std::size_t b = 0; b < now.depth_m.size(); ++b) {
       const double expected = scene.fluid.rest_density_kg_m3 * 9.81 * now.depth_m[b];  // Pa
@@ -157,7 +157,7 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   double worst = 0;
   for (std::size_t b = 0; b < bands; ++b) {
     const double expected = rho0 * g * mean.depth_m[b];  // Pa
-    // Issue 3: within 10% of rho0 g d pointwise in the bulk. The top-layer convention for the
+    // Within 10% of rho0 g d pointwise in the bulk. The top-layer convention for the
     // surface is itself uncertain by a fraction of a spacing (a few % at the shallowest band).
     // Without the first-moment correction of the pressure force the relaxed bulk read 7-12% high.
     EXPECT_NEAR(mean.pressure_pa[b], expected, 0.10 * expected) << "depth " << mean.depth_m[b] << " m";

@@ -1,8 +1,8 @@
 // Runs the CPU backend's validation tests (tests/sim_gpu/test_*.cpp), unchanged, on the Vulkan
-// backend: issue 4 asks that "the same validation physics tests as the CPU backend pass on
-// Vulkan", so the test bodies, scenes, durations and criteria are the CPU suite's own source,
-// compiled a second time with `CpuSolver` standing for VulkanBackendSolver below. A change to a
-// CPU validation test changes its Vulkan run with it; nothing is restated here.
+// backend: the same validation physics must hold on both, so the test bodies, scenes,
+// durations and criteria are the CPU suite's own source, compiled a second time with
+// `CpuSolver` standing for VulkanBackendSolver below. A change to a CPU validation test changes
+// its Vulkan run with it; nothing is restated here.
 //
 // Use, in a translation unit of its own (the CPU files each have their own anonymous helpers):
 //

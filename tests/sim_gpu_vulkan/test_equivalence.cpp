@@ -1,4 +1,4 @@
-// The Vulkan backend equals the CPU reference (the oracle, issue 3) to float tolerance after a
+// The Vulkan backend equals the CPU reference (the oracle) to float tolerance after a
 // few steps, and stays statistically equivalent over longer runs. Both backends start from the
 // same model (the CPU reference's scene set-up) and take the same time steps.
 #include <gtest/gtest.h>

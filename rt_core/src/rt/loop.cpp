@@ -182,7 +182,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   // A latched command-watchdog trip, and nothing else, is the device's answer to our own silence
   // (a link loss longer than device_watchdog_ms, a stalled loop). Once its frames flow again we
   // clear it, which the device honours only while disabled, so clearing never switches force on:
-  // the safety layer's link recovery and engage gate decide when the wrench returns (issue 8).
+  // the safety layer's link recovery and engage gate decide when the wrench returns.
   // Every other device fault (e-stop, over-current, workspace, bad commands) stays latched.
   d.command.clear_faults = !out.enable && !out.estop && d.fresh && valid && d.state.fault == HF_FAULT_COMMAND_WATCHDOG;
   d.scene_wrench = d.workspace.to_scene(out.wrench);

@@ -2,7 +2,7 @@
 // definitions, so `make bench` puts the two backends side by side), with the per-pass GPU split
 // from timestamp queries:
 //  - pool (§6.2.1, fig. 6a): a 1 x 1 m pool 0.25 m deep at ~8k, 16k, 32k, 64k particles; each
-//    also timed on the CPU backend (2 threads) in this process for the ratio of issue 4;
+//    also timed on the CPU backend (2 threads) in this process for the Vulkan/CPU ratio;
 //  - fig6b: 25k particles, one floating sphere of 1k..20k particles;
 //  - fig6c: 25k particles with 1..16 spheres sharing 8k body particles.
 // Usage: bench_sim_vulkan --out FILE.json [--quick] [--validation]. Progress on stderr.

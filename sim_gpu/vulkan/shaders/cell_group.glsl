@@ -1,7 +1,7 @@
 // One invocation per grid cell, holding up to CELL_GROUP of its particles in registers: every
 // particle of a cell has the same 27-cell neighbourhood (the same 9 runs), so each neighbour
 // candidate is fetched once per cell instead of once per particle, about 8 times fewer texel
-// fetches, the cost that dominates on lavapipe (issue 4). Each particle still sums its terms
+// fetches, the cost that dominates on lavapipe. Each particle still sums its terms
 // in run order, candidate by candidate, exactly as the per-particle loop and the CPU do.
 #extension GL_EXT_control_flow_attributes : require
 #define CELL_GROUP 8

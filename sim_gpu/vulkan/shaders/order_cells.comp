@@ -2,7 +2,7 @@
 #extension GL_GOOGLE_include_directive : require
 // Counting sort, deterministic order: atomics hand out ranks in arrival order, which changes
 // from run to run; sorting each cell's slots by particle index restores the stable order of
-// the CPU's counting sort (issue 4: rank within the cell by particle index). Cells hold a few
+// the CPU's counting sort (rank within the cell by particle index). Cells hold a few
 // particles, so an insertion sort per cell is cheap.
 #include "common.glsl"
 layout(local_size_x = 64) in;

@@ -27,7 +27,7 @@ struct SafetyConfig {
   double engage_ramp_ms = 200.0;
   bool require_deadman = false;
   double engage_threshold_nm = 0.05;             // torque counterpart of engage_threshold_n
-  // Engaging under a resting load (issue 8): a command that stayed within +/- the steady band for
+  // Engaging under a resting load: a command that stayed within +/- the steady band for
   // engage_hold_ms (judged after the limits: a load beyond them engages at the limit) may engage
   // too; 0 ms turns this rule off. The ramp from zero then lasts max(engage_ramp_ms, |F| / engage_ramp_rate_n_per_s, |tau| / ..._nm_per_s).
   double engage_hold_ms = 150.0;

@@ -1,5 +1,5 @@
 // The safety layer: every command that reaches a device passes through SafetyLayer::step, once per
-// tick, in this fixed order (brief: Contracts; issue 5):
+// tick, in this fixed order:
 //
 //   1. non-finite -> zero        NaN/Inf in the command -> zero wrench; a non-finite device state
 //                                is a link_invalid fault (step 7).

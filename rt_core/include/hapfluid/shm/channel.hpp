@@ -1,4 +1,4 @@
-// Lock-free shared-memory channels between the hapfluid processes (brief: Contracts).
+// Lock-free shared-memory channels between the hapfluid processes (docs/architecture.md, Contracts).
 //
 // Ownership (iceoryx-style, explicit):
 //   * One POSIX shm segment per channel, named "/<prefix>.<channel>", created by its single writer

@@ -1,4 +1,4 @@
-// The byte layouts of every shared-memory channel (brief: Contracts). One file, one ABI version:
+// The byte layouts of every shared-memory channel (docs/architecture.md, Contracts). One file, one ABI version:
 // any change to a struct here bumps kAbiVersion, and readers of an older build refuse to attach
 // with a message naming both versions.
 //

@@ -46,7 +46,7 @@ class Buffer {
 };
 
 // A texel view of a buffer (samplerBuffer / usamplerBuffer in the shaders): on lavapipe texel
-// fetches are about ten times faster than storage-buffer loads (issue 4), so every array that
+// fetches are about ten times faster than storage-buffer loads on lavapipe, so every array that
 // neighbour loops read is also bound through one of these.
 class TexelView {
  public:

@@ -2,7 +2,7 @@
 // still runs the CPU backend), the instance with the Khronos validation layer on request, the
 // choice of a physical device, the logical device with one compute queue, and a command pool.
 //
-// Device choice for `auto` (issue 4): a discrete GPU, else an integrated GPU, else another
+// Device choice for `auto`: a discrete GPU, else an integrated GPU, else another
 // hardware type, else a CPU implementation (Mesa lavapipe). When nothing usable exists the
 // constructor throws VulkanUnavailable with a message that says what is missing and how to fix
 // it; the caller (the backend factory) decides whether that is fatal or a fallback to the CPU.
