@@ -31,6 +31,7 @@ std::uint32_t faults_from_status(std::uint8_t status) {
 
 HapticArm::HapticArm(std::string name, std::unique_ptr<MessageLink> link, int handshake_ms)
     : name_(std::move(name)), link_(std::move(link)) {
+  health_.echoes_commands = true;
   hf_message request;
   std::memset(&request, 0, sizeof request);
   request.type = HF_MSG_INFO_REQUEST;
@@ -64,6 +65,7 @@ bool HapticArm::accept_state_sequence(std::uint16_t seq) {
   state_seq_.started = 0;  // the new counter is the reference (gaps counted so far are kept)
   hf_seq_accept(&state_seq_, seq, modulus);
   health_.device_restarts++;
+  health_.commands_sent_when_heard = health_.commands_sent;  // a rebooted device starts listening anew
   last_echo_ours_ = false;  // its echo starts again too
   echo_seen_ = echo_moved_ = false;
   return true;
@@ -94,6 +96,7 @@ void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_tick
   const auto advance = static_cast<std::uint8_t>(echo - last_echo_);
   if (ours && last_echo_ours_ && advance > device_ticks && advance < kRecent)
     health_.commands_lost += advance - device_ticks;
+  if (ours && (advance != 0 || !last_echo_ours_)) health_.commands_sent_when_heard = health_.commands_sent;
   last_echo_ = echo;
   last_echo_ours_ = ours;
 }

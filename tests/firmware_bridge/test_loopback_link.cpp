@@ -188,6 +188,37 @@ TEST_P(EveryFraming, CommandsTheDeviceNeverAppliedAreCountedFromItsEcho) {
   EXPECT_EQ(rig.arm->health().commands_lost, 24u);
 }
 
+TEST_P(EveryFraming, TheEchoSaysHowManyOfOurCommandsTheDeviceHasNotBeenSeenToTake) {
+  // A device that takes every command echoes each in its next state: nothing outstanding beyond
+  // the one in flight. One that stops reading (its commands discarded unread) keeps sending
+  // states with the same echo: every command since counts as unheard, and hearing again clears it.
+  Rig rig(GetParam(), "deaf");
+  device::DeviceState state;
+  auto unheard = [&] { return rig.arm->health().commands_sent - rig.arm->health().commands_sent_when_heard; };
+  EXPECT_TRUE(rig.arm->health().echoes_commands);
+  for (int tick = 0; tick < 50; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+    if (tick > 2) ASSERT_LE(unheard(), 1u) << "tick " << tick;
+  }
+  for (int tick = 0; tick < 30; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    hf_message m;
+    for (int budget = device::kDrainUnitBudget; rig.device_link->receive(m, budget) == device::Io::ok;) {
+    }
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_GE(unheard(), 30u);
+  for (int tick = 0; tick < 3; ++tick) {
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  EXPECT_LE(unheard(), 1u) << "the device hears again";
+}
+
 TEST_P(EveryFraming, AHostTakingOverFromAKilledOneCountsNoLostCommands) {
   // A host killed mid-run left the device echoing its last command (low byte 250). A new host
   // counts from 0, so the device takes its commands for late ones until its watchdog lets a new

@@ -18,8 +18,8 @@ from typing import Callable
 import can
 import numpy as np
 
-from hil_stack import (FAULT_COMMUNICATION_CONSTRAINTS, FAULT_DEVICE_REPORTED, FAULT_ESTOP, FAULT_FOREIGN_COMMAND,
-                       FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, FLAG_FORCE_NORM_LIMITED, FLAG_HARD_ZERO,
+from hil_stack import (FAULT_COMMUNICATION_CONSTRAINTS, FAULT_DEVICE_NOT_LISTENING, FAULT_DEVICE_REPORTED, FAULT_ESTOP,
+                       FAULT_FOREIGN_COMMAND, FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, FLAG_FORCE_NORM_LIMITED, FLAG_HARD_ZERO,
                        FLAG_NONFINITE_INPUT, FLAG_SIM_STALE_RAMP, FLAG_TORQUE_NORM_LIMITED, LINK_FAULTS, Stack,
                        TraceFollower, engaged, force, read_csv)
 from hapfluid import load_toml
@@ -412,8 +412,9 @@ MATRIX = [
     Fault("device_silent", "the fake device stops sending (--silent-after 0)", "zero; link_timeout",
           device_args=("--silent-after", "0"), **LINK_TIMEOUT),
     Fault("device_stops_reading", "the fake device stops reading commands (--stop-answering-after 0)",
-          "device: motors off by its watchdog; host: zero, device_reported", **DEVICE,
-          bound=keys_ms("device_watchdog_ms"), fault_bits=FAULT_DEVICE_REPORTED, flags=FLAG_HARD_ZERO,
+          "device: motors off by its watchdog; host: zero, device_not_listening or device_reported", **DEVICE,
+          bound=keys_ms("device_watchdog_ms"), fault_bits=FAULT_DEVICE_REPORTED | FAULT_DEVICE_NOT_LISTENING,
+          flags=FLAG_HARD_ZERO,
           device_zero="watchdog", watchdog_needs_enable=True, device_args=("--stop-answering-after", "0")),
     Fault("device_crc_corrupt", "every STATE's CRC corrupted (--corrupt-every 1)", "zero; link_timeout",
           device_args=("--corrupt-every", "1"), **LINK_TIMEOUT),

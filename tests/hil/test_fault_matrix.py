@@ -16,8 +16,8 @@ import pytest
 
 from fault_matrix_rows import (LOAD, LOAD_N, MATRIX, SIM_NICE, SIM_RATE_HZ, Run, read_device_log, wait_engaged,
                                wait_trace)
-from hil_stack import (FAULT_SIM_STALE, LINK_FAULTS, WAIT_TIMEOUT_S, Stack, assert_within_limits, engaged, force,
-                       read_csv)
+from hil_stack import (FAULT_DEVICE_NOT_LISTENING, FAULT_SIM_STALE, LINK_FAULTS, WAIT_TIMEOUT_S, Stack,
+                       assert_within_limits, engaged, force, read_csv)
 from hapfluid_proto.pycan_loopback import LoopbackBus
 
 # What a bound (rig keys) does not hold and a measurement does: the rules run once per tick, on
@@ -77,15 +77,18 @@ def judge_live(run, fault, triggered_ns, injected_ns):
 
     if fault.watchdog_needs_enable and not run.device_enabled_at_cut:
         # A stray fault had the host disable the device just before it went deaf: its watchdog
-        # runs only while enabled, so nothing trips and the host is never told (the host does not
-        # check that its commands are echoed: docs/fault-matrix.md). The motors stay off: judge that.
+        # runs only while enabled, so nothing trips there. The motors stay off, and the host
+        # learns it from the command echo that no longer follows (device_not_listening).
         assert not carrying
         for name, log in device_logs(run).items():
             moving = [r for r in log if r["rx_ns"] >= injected_ns and applied(r) != 0]
             assert not moving, f"{name}, deaf and disabled, applied {applied(moving[0]):.3f}"
             assert_within_limits(log, d["max_force_n"], d["max_torque_nm"])
         assert_commands_within_limits(run, trace)
-        return {"struck": "a device disabled by a stray fault: deaf while disabled, motors off, not reported"}
+        told = [r for r in trace if r["send_ns"] >= injected_ns and int(r["d0_faults"]) & FAULT_DEVICE_NOT_LISTENING]
+        assert told, "the host never noticed that the disabled device stopped taking its commands"
+        return {"struck": "a device disabled by a stray fault: deaf while disabled, motors off, "
+                          f"device_not_listening after {(told[0]['send_ns'] - injected_ns) * 1e-6:.1f} ms"}
 
     if fault.zero:
         at_rest = (f == 0) & (tau == 0)

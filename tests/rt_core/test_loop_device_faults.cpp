@@ -23,6 +23,9 @@ class FaultyDevice final : public device::Device {
   std::uint32_t restarts = 0;  // health().device_restarts
   std::uint64_t foreign = 0;   // health().foreign_commands
   std::uint64_t lost = 0;      // health().commands_lost
+  bool echoes = false;         // health().echoes_commands: its states echo the commands it took
+  bool deaf = false;           // ... and it has stopped taking them
+  std::uint64_t sent = 0, heard = 0;
   bool silent = false;
   device::DeviceCommand last{};
   bool poll(device::DeviceState& out) override {
@@ -34,6 +37,8 @@ class FaultyDevice final : public device::Device {
   }
   bool send(const device::DeviceCommand& c) override {
     last = c;
+    ++sent;
+    if (!deaf) heard = sent;
     return true;
   }
   device::DeviceHealth health() const override {
@@ -42,6 +47,9 @@ class FaultyDevice final : public device::Device {
     h.device_restarts = restarts;
     h.foreign_commands = foreign;
     h.commands_lost = lost;
+    h.echoes_commands = echoes;
+    h.commands_sent = sent;
+    h.commands_sent_when_heard = heard;
     return h;
   }
   const char* name() const override { return "faulty"; }
@@ -168,6 +176,48 @@ TEST(LoopDeviceFaults, CommandsTheDeviceNeverAppliedCountTowardTheCommunicationC
   EXPECT_FALSE(l.device->last.enable);
   l.ticks(100);
   EXPECT_TRUE(violated()) << "cleared without the operator";
+}
+
+TEST(LoopDeviceFaults, ADeviceThatKeepsTalkingButStopsHearingUsIsALinkFaultUntilItHearsAgain) {
+  // Its states keep coming, fresh and valid, but their echo no longer follows our commands.
+  // Once it has missed device_watchdog_ms of them (20 at 1 kHz) the loop disables it and says
+  // why; when it hears again the link recovers as after any link fault, through the engage
+  // ramp. (Engaged first on the real clock, as above.)
+  LoopWithOneDevice l;
+  l.device->echoes = true;
+  auto not_listening = [&] {
+    return (l.loop->last_trace().devices[0].faults & safety::fault_device_not_listening) != 0;
+  };
+  for (int i = 0; i < 2000 && !l.device->last.enable; ++i) {
+    l.ticks(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_TRUE(l.device->last.enable) << safety::fault_names(l.loop->last_trace().devices[0].faults);
+  l.device->deaf = true;
+  l.ticks(20);
+  EXPECT_FALSE(not_listening()) << "20 commands unheard are within the device's own watchdog";
+  EXPECT_TRUE(l.device->last.enable);
+  l.ticks(2);
+  EXPECT_TRUE(not_listening());
+  EXPECT_FALSE(l.device->last.enable);
+  EXPECT_EQ(safety::fault_names(l.loop->last_trace().devices[0].faults & safety::fault_device_not_listening),
+            "device_not_listening");
+  l.device->deaf = false;  // it hears again
+  bool recovered = false;
+  for (int i = 0; i < 2000 && !recovered; ++i) {
+    l.ticks(1);
+    recovered = !not_listening();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_TRUE(recovered) << "a link fault recovers once the device listens again";
+}
+
+TEST(LoopDeviceFaults, ADeviceWithoutACommandEchoIsNeverJudgedDeaf) {
+  // A device kind whose states carry no echo (echoes_commands false) says nothing about it.
+  LoopWithOneDevice l;
+  l.device->deaf = true;
+  l.ticks(200);
+  EXPECT_EQ(l.loop->last_trace().devices[0].faults & safety::fault_device_not_listening, 0u);
 }
 
 TEST(LoopDeviceFaults, CountsTheDriverMadeBeforeTheLoopStartedAreNotThisRunsButForeignCommandsAre) {

@@ -157,6 +157,12 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   d.foreign_commands = health.foreign_commands;
   const auto lost = static_cast<std::uint32_t>(health.commands_lost - d.commands_lost);
   d.commands_lost = health.commands_lost;
+  // A device that keeps talking but takes none of our commands (its echo stands still) would
+  // leave the loop engaged while the motors do whatever the device last heard. Counted in
+  // commands, not time: a loop that stalled sent none meanwhile, and a device that stalled
+  // echoes the newest in its first state after. The allowance is the device's own watchdog.
+  const double unheard = double(health.commands_sent - health.commands_sent_when_heard);
+  const bool unheard_long = unheard * d.safety.config().period_s * 1e3 > d.safety.config().device_watchdog_ms;
   safety::SafetyInput in;
   in.now_ns = now;
   in.command = d.workspace.to_device(scene_command);
@@ -169,6 +175,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.estop_input = (d.state.buttons & 2u) != 0;  // bit 1: e-stop button on the device
   in.foreign_command = foreign;
   in.commands_lost = lost;
+  in.commands_unheard = health.echoes_commands && d.fresh && unheard_long;
   in.sim_age_ms = sim_age_ms(now);
   in.sim_restarted = d.sim_restarted;
   d.sim_restarted = false;

@@ -24,13 +24,14 @@ void SafetyLayer::update_link(const SafetyInput& in) {
   bool timed_out = !seen_frame_ ||
                    (silent_ms > config_.link_timeout_ms && double(looks_without_frame_) > looks_needed) ||
                    silent_ms > std::max(config_.link_timeout_ms, config_.device_watchdog_ms);
-  bool healthy_now = !timed_out && in.state_valid && !in.device_fault;
+  bool healthy_now = !timed_out && in.state_valid && !in.device_fault && !in.commands_unheard;
   if (healthy_now && !healthy_) healthy_since_ns_ = in.now_ns;
   healthy_ = healthy_now;
 
-  std::uint32_t link_bits = fault_link_timeout | fault_link_invalid | fault_device_reported;
+  std::uint32_t link_bits = fault_link_timeout | fault_link_invalid | fault_device_reported | fault_device_not_listening;
   if (!healthy_now) {
     if (timed_out) faults_ |= fault_link_timeout;
+    if (in.commands_unheard) faults_ |= fault_device_not_listening;
     if (!in.state_valid) faults_ |= fault_link_invalid;
     if (in.device_fault) faults_ |= fault_device_reported;
   } else if ((faults_ & link_bits) &&

@@ -44,6 +44,11 @@ struct DeviceHealth {
   std::uint32_t device_restarts = 0;  // the device's state counter began again (it rebooted)
   std::uint64_t foreign_commands = 0; // COMMANDs for this device heard on its bus that we did not send
   std::uint64_t commands_lost = 0;    // our commands the device never applied (its echo skipped them)
+  // Devices whose states echo the newest command they applied: commands_sent at the newest state
+  // whose echo moved on to one of ours (reset to commands_sent when the device restarts), so
+  // commands_sent - commands_sent_when_heard is how many the device has not been seen to take.
+  bool echoes_commands = false;
+  std::uint64_t commands_sent_when_heard = 0;
   bool connected = false;
 };
 

@@ -35,6 +35,9 @@ enum Fault : std::uint32_t {
                                      // its bus; latched, cleared only by the operator reset
   fault_communication_constraints = 1u << 6,  // too many commands lost (libfranka's
                                      // communication_constraints_violation); latched like the above
+  fault_device_not_listening = 1u << 7,  // the device keeps sending states but its command echo has
+                                     // not followed our commands for device_watchdog_ms of them: it
+                                     // is not hearing us; a link fault, recovers like one
 };
 
 // "force_norm_limited|rate_limited"; "-" for none.

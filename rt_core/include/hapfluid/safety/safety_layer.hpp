@@ -63,6 +63,8 @@ struct SafetyInput {
   bool estop_input = false;        // e-stop button / operator request (latches)
   bool foreign_command = false;    // someone else sent this device a command (latches)
   std::uint32_t commands_lost = 0; // commands the device reported not applied since the last step
+  bool commands_unheard = false;   // the device's echo has not followed our commands for
+                                   // device_watchdog_ms of them while its states keep coming
   double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
   bool sim_restarted = false;      // this tick's sample is the first from a new sim (or the first ever)
 };
