@@ -105,9 +105,14 @@ def judge_live(run, fault, triggered_ns, injected_ns):
     measured = {"to_safe_ms": round(float(to_safe_s * 1e3), 2)}
     if not carrying:
         measured["struck"] = "a hand at a stray fault"
-    # (a) in time; a failure says how late the loop itself was meanwhile (the machine's share)
+    # (a) in time, on the loop's clock: a loop the VM host descheduled (a gap between two commands
+    # beyond the timer-latency allowance) could not react meanwhile, and the excess of that gap
+    # over the allowance is the machine's share, not the rules'. Counted once: the longest gap.
     stalled_ms = float(np.max(np.diff(send[max(first - 1, 0):reached + 1]), initial=0)) * 1e-6
-    assert to_safe_s <= bound_s + allowance_s(run), \
+    machine_s = max(0.0, stalled_ms * 1e-3 - allowance_s(run))
+    if machine_s > 0:
+        measured["machine_stall_ms"] = round(stalled_ms, 2)
+    assert to_safe_s - machine_s <= bound_s + allowance_s(run), \
         (f"{fault.name}: safe after {to_safe_s * 1e3:.1f} ms, bound {fault.bound.text} = {bound_s * 1e3:.1f} ms "
          f"+ {allowance_s(run) * 1e3:.1f} ms allowance; meanwhile the loop's longest gap between two commands "
          f"was {stalled_ms:.1f} ms")

