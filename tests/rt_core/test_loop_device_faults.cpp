@@ -3,9 +3,6 @@
 // once frames flow again, always with enable off; every other fault stays latched.
 #include <gtest/gtest.h>
 
-#include <chrono>
-#include <thread>
-
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/loop.hpp"
 #include "hapfluid/wire/codec.h"
@@ -71,6 +68,17 @@ struct LoopWithOneDevice {
   }
   void ticks(int n) {
     for (int i = 0; i < n; ++i, now += 1'000'000) loop->tick(now, now);
+  }
+  // The safety layer's link recovery and engage gate run on the real clock: tick until `done`
+  // holds, 2 s of real time at most; true when it did.
+  template <class Done>
+  bool tick_until(Done done) {
+    const std::uint64_t deadline = shm::monotonic_ns() + 2'000'000'000ull;
+    while (!done()) {
+      if (shm::monotonic_ns() > deadline) return false;
+      ticks(1);
+    }
+    return true;
   }
 };
 
@@ -156,15 +164,12 @@ TEST(LoopDeviceFaults, CommandsTheDeviceNeverAppliedCountTowardTheCommunicationC
   // The driver counts the commands the device's echo skipped; the loop hands each tick's new
   // ones to the safety layer, which latches the fault beyond 50 (rig default) until the reset.
   // Only commands that enabled the motors count: the device is engaged first (the loop's link
-  // recovery runs on the real clock: ticks 1 ms apart until it enables, 2 s at most).
+  // recovery runs on the real clock: tick_until it enables).
   LoopWithOneDevice l;
   auto violated = [&] {
     return (l.loop->last_trace().devices[0].faults & safety::fault_communication_constraints) != 0;
   };
-  for (int i = 0; i < 2000 && !l.device->last.enable; ++i) {
-    l.ticks(1);
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  l.tick_until([&] { return l.device->last.enable; });
   ASSERT_TRUE(l.device->last.enable) << safety::fault_names(l.loop->last_trace().devices[0].faults);
   ASSERT_FALSE(violated());
   l.device->lost += 30;
@@ -188,10 +193,7 @@ TEST(LoopDeviceFaults, ADeviceThatKeepsTalkingButStopsHearingUsIsALinkFaultUntil
   auto not_listening = [&] {
     return (l.loop->last_trace().devices[0].faults & safety::fault_device_not_listening) != 0;
   };
-  for (int i = 0; i < 2000 && !l.device->last.enable; ++i) {
-    l.ticks(1);
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  l.tick_until([&] { return l.device->last.enable; });
   ASSERT_TRUE(l.device->last.enable) << safety::fault_names(l.loop->last_trace().devices[0].faults);
   l.device->deaf = true;
   l.ticks(20);
@@ -203,13 +205,7 @@ TEST(LoopDeviceFaults, ADeviceThatKeepsTalkingButStopsHearingUsIsALinkFaultUntil
   EXPECT_EQ(safety::fault_names(l.loop->last_trace().devices[0].faults & safety::fault_device_not_listening),
             "device_not_listening");
   l.device->deaf = false;  // it hears again
-  bool recovered = false;
-  for (int i = 0; i < 2000 && !recovered; ++i) {
-    l.ticks(1);
-    recovered = !not_listening();
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
-  EXPECT_TRUE(recovered) << "a link fault recovers once the device listens again";
+  EXPECT_TRUE(l.tick_until([&] { return !not_listening(); })) << "a link fault recovers once the device listens again";
 }
 
 TEST(LoopDeviceFaults, ADeviceWithoutACommandEchoIsNeverJudgedDeaf) {
