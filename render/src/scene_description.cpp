@@ -4,40 +4,9 @@
 #include <cmath>
 
 #include "hapfluid/config/mesh.hpp"
+#include "hapfluid/config/primitive_meshes.hpp"
 
 namespace hapfluid::render {
-namespace {
-
-// A device's probe (a particle body) has no mesh: it is drawn as a ball of the fluid's
-// particle size, a UV sphere (counter-clockwise seen from outside).
-config::TriangleMesh ball(double radius) {
-  constexpr int kRings = 6, kSegments = 10;
-  constexpr double kPi = 3.14159265358979323846;
-  config::TriangleMesh m;
-  m.vertices_m.push_back({0, 0, radius});
-  for (int r = 1; r < kRings; ++r) {
-    const double theta = kPi * r / kRings;
-    for (int k = 0; k < kSegments; ++k) {
-      const double phi = 2 * kPi * k / kSegments;
-      m.vertices_m.push_back({radius * std::sin(theta) * std::cos(phi), radius * std::sin(theta) * std::sin(phi),
-                              radius * std::cos(theta)});
-    }
-  }
-  m.vertices_m.push_back({0, 0, -radius});
-  const auto ring = [](int r, int k) { return static_cast<std::uint32_t>(1 + (r - 1) * kSegments + k % kSegments); };
-  const std::uint32_t bottom = static_cast<std::uint32_t>(m.vertices_m.size() - 1);
-  for (int k = 0; k < kSegments; ++k) {
-    m.triangles.push_back({0, ring(1, k), ring(1, k + 1)});
-    for (int r = 1; r + 1 < kRings; ++r) {
-      m.triangles.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
-      m.triangles.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
-    }
-    m.triangles.push_back({ring(kRings - 1, k), bottom, ring(kRings - 1, k + 1)});
-  }
-  return m;
-}
-
-}  // namespace
 
 SceneDescription describe_scene(const config::Scene& scene) {
   SceneDescription d;
@@ -59,7 +28,9 @@ SceneDescription describe_scene(const config::Scene& scene) {
     const auto& b = scene.bodies[i];
     BodyMesh mesh;
     mesh.name = b.name;
-    mesh.mesh = b.shape == config::BodyShape::particle ? ball(d.particle_radius_m) : config::load_mesh(b.mesh);
+    // A device's probe (a particle body) has no mesh: a ball of the fluid's particle size.
+    mesh.mesh = b.shape == config::BodyShape::particle ? config::primitives::sphere_mesh(d.particle_radius_m, 1)
+                                                       : config::load_mesh(b.mesh);
     mesh.scale = b.scale;
     mesh.colour = palette[i % 4];
     mesh.initial_pose.position_m = glm::vec3(b.pose.position_m.x, b.pose.position_m.y, b.pose.position_m.z);

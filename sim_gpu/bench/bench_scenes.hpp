@@ -14,7 +14,7 @@
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
 #include "hapfluid/sim/model.hpp"
-#include "hapfluid/sim/primitive_meshes.hpp"
+#include "hapfluid/config/primitive_meshes.hpp"
 
 namespace hapfluid::sim::bench {
 

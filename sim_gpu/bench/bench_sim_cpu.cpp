@@ -19,7 +19,7 @@
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
-#include "hapfluid/sim/primitive_meshes.hpp"
+#include "hapfluid/config/primitive_meshes.hpp"
 #include "bench_scenes.hpp"
 
 using namespace hapfluid;

@@ -13,7 +13,7 @@
 #include "hapfluid/config/mesh.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
-#include "hapfluid/sim/primitive_meshes.hpp"
+#include "hapfluid/config/primitive_meshes.hpp"
 
 namespace hapfluid::sim::test {
 

@@ -16,7 +16,7 @@
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/config/mesh.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
-#include "hapfluid/sim/primitive_meshes.hpp"
+#include "hapfluid/config/primitive_meshes.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 
 namespace hs = hapfluid::sim;

@@ -20,7 +20,7 @@
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
-#include "hapfluid/sim/primitive_meshes.hpp"
+#include "hapfluid/config/primitive_meshes.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 #include "../../bench/bench_scenes.hpp"
 

@@ -1,5 +1,5 @@
 // Closed primitive meshes generated in code (sphere, box, surface of revolution, cup) for test
-// scenes and benchmarks that need bodies without mesh files.
+// scenes and benchmarks that need bodies without mesh files, and for the renderer's probe ball.
 #pragma once
 
 #include <algorithm>
@@ -11,9 +11,7 @@
 
 #include "hapfluid/config/mesh.hpp"
 
-namespace hapfluid::sim::primitives {
-
-namespace config = hapfluid::config;
+namespace hapfluid::config::primitives {
 
 // Icosphere of the given radius centred at the origin (counter-clockwise from outside).
 inline config::TriangleMesh sphere_mesh(double radius, int subdivisions) {
@@ -100,4 +98,8 @@ inline config::TriangleMesh cup_mesh(double radius, double height, double wall, 
                  segments);
 }
 
-}  // namespace hapfluid::sim::primitives
+}  // namespace hapfluid::config::primitives
+
+namespace hapfluid::sim {
+namespace primitives = hapfluid::config::primitives;
+}  // namespace hapfluid::sim
