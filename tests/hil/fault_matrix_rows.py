@@ -268,8 +268,10 @@ def bad_command_frames(run):
         seq = peer.hear("a command of the host", BusPeer.CMD_FORCE)[0] + FOREIGN_AHEAD
         burst = [frame for i in range(BAD_COMMAND_SETS)
                  for frame in peer.command(seq + i, (1.0, 0.0, 0.0), flags=1, bad_crc=True)]
-        at = run.device_cut_ns = time.monotonic_ns()
+        run.device_cut_ns = time.monotonic_ns()
         peer.send(burst)
+        # The fault is a burst: it exists once the burst is on the bus, not at its first frame.
+        at = time.monotonic_ns()
         peer.hear("the device's bad_commands fault", BusPeer.FAULT, lambda data: data[1] & HF_FAULT_BAD_COMMANDS)
     finally:
         peer.close()
