@@ -22,13 +22,17 @@ struct Body { double x, y, z, radius, spacing; };
 
 // A pool of `fluid_target` particles in a 1 x 1 m box, depth set by the particle count at a
 // spacing chosen so that the full pool (pool_particles) is 0.25 m deep.
+// `dfsph`: the pool at water's viscosity on the incompressible solver, stepped from the lattice
+// (no settling), as the SPlisHSPlasH comparison runs it; otherwise wcsph at 0.5 Pa s.
 inline config::Scene pool_scene(const std::filesystem::path& dir, int pool_particles, int fluid_target,
-                         const std::vector<Body>& bodies) {
+                                const std::vector<Body>& bodies, bool dfsph = false) {
   const double s = std::cbrt(0.25 / pool_particles);
   const double depth = fluid_target * s * s * s;
   std::ostringstream t;
   t << "name = \"pool\"\n[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, 0.5]\n"
-    << "[fluid]\nparticle_spacing_m = " << s << "\nspeed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n"
+    << "[fluid]\nparticle_spacing_m = " << s << "\n"
+    << (dfsph ? "solver = \"dfsph\"\nsettle_s = 0.0\nviscosity_pa_s = 0.001\n"
+              : "speed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n")
     << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, " << depth << "]\n";
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     config::save_obj(primitives::sphere_mesh(bodies[i].radius, 5), dir / ("sphere" + std::to_string(i) + ".obj"));

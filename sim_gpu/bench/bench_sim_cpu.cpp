@@ -1,6 +1,7 @@
 // bench_sim_cpu: steps per second of the CPU backend.
 //  - fluid pool (§6.2.1, fig. 6a): a 1 x 1 m pool 0.25 m deep at ~8k, 16k, 32k, 64k particles,
-//    1 and 2 threads;
+//    1 and 2 threads; the 32k pool on dfsph too. A "scaling" record per solver gives the 32k
+//    pool's time per step on 1 thread over that on 2 (same steps, same step size);
 //  - fig. 6b: 25k particles, one floating sphere of 1k..20k particles, the pool shrinking to keep
 //    the total;
 //  - fig. 6c: 25k particles with 1..16 spheres sharing 8k body particles.
@@ -11,13 +12,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
 #include "hapfluid/config/scene.hpp"
-#include "hapfluid/sim/cpu_solver.hpp"
+#include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
 #include "hapfluid/config/primitive_meshes.hpp"
 #include "bench_scenes.hpp"
@@ -31,36 +33,60 @@ namespace {
 struct Record { std::string json; };
 std::vector<Record> records;
 
-void measure(const std::string& sweep, const config::Scene& scene, int threads, int steps, const std::string& extra_params) {
-  CpuSolver solver(build_model(scene), threads);
+// Returns the wall time per step, ms.
+double measure(const std::string& sweep, const config::Scene& scene, int threads, int steps, const std::string& extra_params) {
+  const std::unique_ptr<Solver> made = make_cpu_solver(build_model(scene), threads);
+  Solver& solver = *made;
   const double dt = solver.stable_time_step();
   for (int i = 0; i < 3; ++i) solver.step(dt);  // warm-up: first touches, allocations
   const PhaseTimes before = solver.phase_times();
+  const SolverIterations it0 = solver.iterations();
   const auto t0 = std::chrono::steady_clock::now();
   for (int i = 0; i < steps; ++i) solver.step(dt);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const PhaseTimes after = solver.phase_times();
+  const SolverIterations it1 = solver.iterations();
+  auto per_step = [&](std::uint64_t a, std::uint64_t b) { return static_cast<double>(a - b) / steps; };
   const auto& m = solver.model();
   const std::size_t fluid = m.fluid.size(), body = m.body_particles.size();
   const double ms = 1000 * wall / steps;
   auto phase = [&](double a, double b) { return 1000 * (a - b) / steps; };
-  char buf[1024];
+  char buf[1536];
   std::snprintf(buf, sizeof buf,
                 "{\"bench\": \"bench_sim_cpu\", \"params\": {\"backend\": \"cpu\", \"sweep\": \"%s\", \"particles\": %zu, "
-                "\"fluid_particles\": %zu, \"body_particles\": %zu, \"boundary_particles\": %zu, \"threads\": %d%s}, "
+                "\"fluid_particles\": %zu, \"body_particles\": %zu, \"boundary_particles\": %zu, \"threads\": %d, "
+                "\"solver\": \"%s\", \"dt_s\": %.6g%s}, "
                 "\"metrics\": {\"steps_per_s\": %.3f, \"ms_per_step\": %.3f, \"particle_steps_per_s\": %.0f, "
                 "\"neighbour_search_ms\": %.3f, \"density_ms\": %.3f, \"forces_ms\": %.3f, \"bodies_ms\": %.3f, "
-                "\"integration_ms\": %.3f}}",
-                sweep.c_str(), fluid + body, fluid, body, m.wall_particle_count, threads, extra_params.c_str(), steps / wall, ms,
+                "\"integration_ms\": %.3f, \"pressure_ms\": %.3f, \"density_iterations_per_step\": %.2f, "
+                "\"divergence_iterations_per_step\": %.2f, \"viscosity_iterations_per_step\": %.2f}}",
+                sweep.c_str(), fluid + body, fluid, body, m.wall_particle_count, threads, solver.method(), dt,
+                extra_params.c_str(), steps / wall, ms,
                 steps * static_cast<double>(fluid + body) / wall, phase(after.neighbour_search_s, before.neighbour_search_s),
                 phase(after.density_s, before.density_s), phase(after.forces_s, before.forces_s),
-                phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s));
+                phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s),
+                phase(after.pressure_s, before.pressure_s), per_step(it1.density_iterations, it0.density_iterations),
+                per_step(it1.divergence_iterations, it0.divergence_iterations),
+                per_step(it1.viscosity_iterations, it0.viscosity_iterations));
   records.push_back({buf});
-  std::fprintf(stderr, "bench_sim_cpu: %-5s %6zu particles (%zu body), %d thread(s): %7.2f ms/step, %6.1f steps/s "
-               "[grid %.2f, density %.2f, forces %.2f, bodies %.2f, integrate %.2f ms]\n",
-               sweep.c_str(), fluid + body, body, threads, ms, steps / wall, phase(after.neighbour_search_s, before.neighbour_search_s),
-               phase(after.density_s, before.density_s), phase(after.forces_s, before.forces_s),
+  std::fprintf(stderr, "bench_sim_cpu: %-5s %s %6zu particles (%zu body), %d thread(s): %7.2f ms/step, %6.1f steps/s "
+               "[grid %.2f, density %.2f, pressure %.2f, forces %.2f, bodies %.2f, integrate %.2f ms]\n",
+               sweep.c_str(), solver.method(), fluid + body, body, threads, ms, steps / wall,
+               phase(after.neighbour_search_s, before.neighbour_search_s), phase(after.density_s, before.density_s),
+               phase(after.pressure_s, before.pressure_s), phase(after.forces_s, before.forces_s),
                phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s));
+  return ms;
+}
+
+void record_scaling(const char* solver, int particles, double ms_1, double ms_2) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "{\"bench\": \"bench_sim_cpu\", \"params\": {\"backend\": \"cpu\", \"sweep\": \"scaling\", \"solver\": \"%s\", "
+                "\"particles_requested\": %d}, \"metrics\": {\"ms_per_step_1_thread\": %.3f, \"ms_per_step_2_threads\": %.3f, "
+                "\"speedup_2_threads\": %.3f}}",
+                solver, particles, ms_1, ms_2, ms_1 / ms_2);
+  records.push_back({buf});
+  std::fprintf(stderr, "bench_sim_cpu: %s pool of %d, 2 threads are %.2fx one\n", solver, particles, ms_1 / ms_2);
 }
 
 }  // namespace
@@ -88,8 +114,17 @@ int main(int argc, char** argv) {
   try {
     // Fluid pool, fig. 6a.
     const std::vector<int> sizes = quick ? std::vector<int>{8000, 32000} : std::vector<int>{8000, 16000, 32000, 64000};
-    for (int n : sizes)
-      for (int threads : {1, 2}) measure("pool", pool_scene(dir, n, n, {}), threads, steps, "");
+    for (int n : sizes) {
+      const double ms_1 = measure("pool", pool_scene(dir, n, n, {}), 1, steps, "");
+      const double ms_2 = measure("pool", pool_scene(dir, n, n, {}), 2, steps, "");
+      if (n == 32000) record_scaling("wcsph", n, ms_1, ms_2);
+    }
+    {
+      const int n = 32000;
+      const double ms_1 = measure("pool", pool_scene(dir, n, n, {}, true), 1, steps, "");
+      const double ms_2 = measure("pool", pool_scene(dir, n, n, {}, true), 2, steps, "");
+      record_scaling("dfsph", n, ms_1, ms_2);
+    }
     // Fig. 6b: one sphere of 1k..20k particles in a 25k-particle scene.
     const int total = 25000;
     const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};

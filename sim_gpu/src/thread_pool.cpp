@@ -1,8 +1,33 @@
 #include "hapfluid/sim/thread_pool.hpp"
 
+#include <chrono>
 #include <stdexcept>
 
 namespace hapfluid::sim {
+namespace {
+
+inline void cpu_relax() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#elif defined(__aarch64__)
+  asm volatile("yield");
+#endif
+}
+
+// Spins until done() holds or `ns` have passed; true if done() held.
+template <class Done>
+bool spin_until(Done&& done, long ns) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::nanoseconds(ns);
+  for (;;) {
+    for (int k = 0; k < 64; ++k) {
+      if (done()) return true;
+      cpu_relax();
+    }
+    if (std::chrono::steady_clock::now() >= deadline) return done();
+  }
+}
+
+}  // namespace
 
 ThreadPool::ThreadPool(int threads) : threads_(threads) {
   if (threads < 1) throw std::invalid_argument("thread count must be >= 1");
@@ -12,7 +37,7 @@ ThreadPool::ThreadPool(int threads) : threads_(threads) {
 ThreadPool::~ThreadPool() {
   {
     std::lock_guard lock(mutex_);
-    stopping_ = true;
+    stopping_.store(true);
   }
   start_cv_.notify_all();
   for (auto& t : helpers_) t.join();
@@ -23,41 +48,46 @@ void ThreadPool::run(std::size_t count, const Job& fn) {
     fn(0, count, 0);
     return;
   }
+  job_ = &fn;
+  count_ = count;
+  pending_.store(threads_ - 1, std::memory_order_relaxed);
   {
+    // Under the mutex, so that a helper about to sleep either sees the new generation or is
+    // already waiting when it is notified.
     std::lock_guard lock(mutex_);
-    job_ = &fn;
-    count_ = count;
-    pending_ = threads_ - 1;
-    ++generation_;
+    generation_.fetch_add(1, std::memory_order_release);
   }
   start_cv_.notify_all();
   std::size_t begin, end;
   chunk(count, threads_, 0, begin, end);
   fn(begin, end, 0);
-  std::unique_lock lock(mutex_);
-  done_cv_.wait(lock, [this] { return pending_ == 0; });
-  job_ = nullptr;
+  auto all_done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
+  if (!spin_until(all_done, kSpinNs)) {
+    std::unique_lock lock(mutex_);
+    done_cv_.wait(lock, all_done);
+  }
 }
 
 void ThreadPool::worker_loop(int w) {
   unsigned long seen = 0;
   for (;;) {
-    const Job* job;
-    std::size_t count;
-    {
+    auto next = [&] {
+      return stopping_.load(std::memory_order_relaxed) || generation_.load(std::memory_order_acquire) != seen;
+    };
+    if (!spin_until(next, kSpinNs)) {
       std::unique_lock lock(mutex_);
-      start_cv_.wait(lock, [&] { return stopping_ || generation_ != seen; });
-      if (stopping_) return;
-      seen = generation_;
-      job = job_;
-      count = count_;
+      start_cv_.wait(lock, next);
     }
+    if (stopping_.load()) return;
+    seen = generation_.load(std::memory_order_acquire);
     std::size_t begin, end;
-    chunk(count, threads_, w, begin, end);
-    (*job)(begin, end, w);
-    {
+    chunk(count_, threads_, w, begin, end);
+    (*job_)(begin, end, w);
+    if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+      // The caller may be asleep on done_cv_: take the mutex so the wake-up cannot fall between
+      // its check and its wait.
       std::lock_guard lock(mutex_);
-      if (--pending_ == 0) done_cv_.notify_one();
+      done_cv_.notify_one();
     }
   }
 }
