@@ -19,6 +19,7 @@ exit code and leaves under out/<scene>-<timestamp>/:
   device_<name>.csv        what the fake device felt (its per-tick log)
   sim/couplings.csv        the coupling wrench the sim computed (on the hand), sim/bodies.csv, sim/stats.json
   sim/particles/frame_*.vtk  particle frames every --export-every s of simulated time (ParaView)
+  sim/particles/particles.vtk.series  the frames' simulated times (open this in ParaView)
   wrenches.png             fig. 8b-style plot: the scene's force and torque components (plot_wrenches.py
                            SCENE_COMPONENTS, e.g. the stroke axis for stirring) of both histories against
                            the hand's clock, the script's motions shaded

@@ -52,7 +52,8 @@ void remove_previous_outputs(const std::filesystem::path& dir) {
   const std::filesystem::path frames = dir / "particles";
   if (!std::filesystem::is_directory(frames)) return;
   for (const auto& entry : std::filesystem::directory_iterator(frames))
-    if (entry.path().extension() == ".vtk" || entry.path().extension() == ".part") std::filesystem::remove(entry.path());
+    if (entry.path().extension() == ".vtk" || entry.path().extension() == ".series" || entry.path().extension() == ".part")
+      std::filesystem::remove(entry.path());
 }
 
 void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m, double time_s) {
@@ -116,6 +117,11 @@ void VtkFrameSeries::write(const SimulationModel& model, double time_s) {
   std::snprintf(name, sizeof name, "frame_%06d.vtk", written_);
   write_vtk_frame(dir_ / name, model, time_s);
   ++written_;
+  char entry[128];
+  std::snprintf(entry, sizeof entry, "%s\n    {\"name\": \"%s\", \"time\": %.9g}", written_ > 1 ? "," : "", name, time_s);
+  series_entries_ += entry;
+  write_text_atomically(dir_ / "particles.vtk.series",
+                        "{\n  \"file-series-version\": \"1.0\",\n  \"files\": [" + series_entries_ + "\n  ]\n}\n");
   // A caller that looks less often than the interval (live: at the frame rate) gets one frame
   // per look, not a burst to catch up.
   next_s_ += interval_s_;

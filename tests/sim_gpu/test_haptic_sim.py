@@ -108,6 +108,14 @@ def test_batch_run_writes_every_output(binary, tmp_path):
         assert field in frame, field
     assert set(frame["kind"].tolist()) == {0, 1, 2}  # fluid, wall, body
     assert (frame["body"][frame["kind"] == 2] == 0).all()
+    # ParaView's file series: every frame, in order, at the simulated time its header states.
+    series = json.loads((out / "particles" / "particles.vtk.series").read_text())
+    assert series["file-series-version"] == "1.0"
+    assert [e["name"] for e in series["files"]] == [f.name for f in frames]
+    for entry, f in zip(series["files"], frames):
+        stated = float(f.read_bytes().split(b"\n")[1].split(b" t=")[1].split()[0])
+        assert entry["time"] == pytest.approx(stated, abs=1e-6), f.name
+    assert [e["time"] for e in series["files"]] == pytest.approx([0.0, 0.05, 0.1], abs=1e-9)
 
     with open(out / "bodies.csv") as f:
         rows = list(csv.DictReader(f))
@@ -217,7 +225,9 @@ def test_rerun_that_succeeds_keeps_no_frame_of_the_previous_run(binary, tmp_path
     stats = json.loads((out / "stats.json").read_text())
     assert stats["complete"] is True and stats["frames_exported"] == 3
     assert [f.name for f in sorted((out / "particles").iterdir())] == \
-        ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
+        ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk", "particles.vtk.series"]
+    series = json.loads((out / "particles" / "particles.vtk.series").read_text())
+    assert [e["name"] for e in series["files"]] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
     assert not list(out.rglob("*.part"))
 
 

@@ -16,8 +16,10 @@ namespace hapfluid::sim {
 void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& model, double time_s);
 
 // A run's particle frames: DIR/frame_NNNNNN.vtk every `interval_s` of simulated time (haptic-sim
-// --export-every, batch and live alike; 0: none). The constructor creates DIR; an earlier run's
-// frames there are remove_previous_outputs' to remove, before.
+// --export-every, batch and live alike; 0: none), and DIR/particles.vtk.series, ParaView's file
+// series (JSON: each frame's name and simulated time, s), rewritten after every frame so that
+// ParaView's time axis is the simulated time even for a run cut short. The constructor creates
+// DIR; an earlier run's frames there are remove_previous_outputs' to remove, before.
 class VtkFrameSeries {
  public:
   VtkFrameSeries(std::filesystem::path dir, double interval_s);
@@ -30,6 +32,7 @@ class VtkFrameSeries {
   std::filesystem::path dir_;
   double interval_s_ = 0, next_s_ = 0;
   int written_ = 0;
+  std::string series_entries_;  // the "files" entries of the series so far
 };
 
 // A CSV file written row by row to "<file>.part" and renamed to <file> by finish().
