@@ -1,5 +1,6 @@
 #include "hapfluid/sim/outputs.hpp"
 
+#include <array>
 #include <bit>
 #include <cerrno>
 #include <cstdio>
@@ -28,18 +29,39 @@ void put_be(std::vector<char>& out, T value) {
 
 void put_text(std::vector<char>& out, const std::string& text) { out.insert(out.end(), text.begin(), text.end()); }
 
+// The header, points and one vertex cell per point of a legacy binary POLYDATA file.
+template <class Pos>
+void put_point_cloud(std::vector<char>& out, const std::string& title, std::size_t n, Pos&& position) {
+  put_text(out, "# vtk DataFile Version 3.0\n" + title + "\nBINARY\nDATASET POLYDATA\nPOINTS " + std::to_string(n) +
+                    " float\n");
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto p = position(i);
+    put_be(out, static_cast<float>(p[0])), put_be(out, static_cast<float>(p[1])), put_be(out, static_cast<float>(p[2]));
+  }
+  put_text(out, "\nVERTICES " + std::to_string(n) + " " + std::to_string(2 * n) + "\n");
+  for (std::size_t i = 0; i < n; ++i) put_be(out, std::int32_t{1}), put_be(out, static_cast<std::int32_t>(i));
+  put_text(out, "\nPOINT_DATA " + std::to_string(n));
+}
+
+void write_bytes_atomically(const std::filesystem::path& file, const std::vector<char>& bytes) {
+  const std::filesystem::path part = file.string() + ".part";
+  {
+    std::ofstream s(part, std::ios::binary);
+    if (!s) io_error("cannot write", part);
+    s.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!s) io_error("write failed for", part);
+  }
+  std::filesystem::rename(part, file);
+}
+
+std::string frame_title(const SimulationModel& m, double time_s) {
+  return "hapfluid " + m.scene_name + " t=" + std::to_string(time_s) + " s";
+}
+
 }  // namespace
 
 void write_text_atomically(const std::filesystem::path& file, const std::string& text) {
-  const std::filesystem::path part = file.string() + ".part";
-  {
-    std::ofstream out(part, std::ios::binary);
-    if (!out) io_error("cannot write", part);
-    out << text;
-    out.flush();
-    if (!out) io_error("write failed for", part);
-  }
-  std::filesystem::rename(part, file);
+  write_bytes_atomically(file, std::vector<char>(text.begin(), text.end()));
 }
 
 void remove_previous_outputs(const std::filesystem::path& dir) {
@@ -79,12 +101,9 @@ void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m
 
   std::vector<char> out;
   out.reserve(n * 60 + 1024);
-  put_text(out, "# vtk DataFile Version 3.0\nhapfluid " + m.scene_name + " t=" + std::to_string(time_s) +
-                    " s\nBINARY\nDATASET POLYDATA\nPOINTS " + std::to_string(n) + " float\n");
-  for (const Point& p : pts) put_be(out, p.x), put_be(out, p.y), put_be(out, p.z);
-  put_text(out, "\nVERTICES " + std::to_string(n) + " " + std::to_string(2 * n) + "\n");
-  for (std::size_t i = 0; i < n; ++i) put_be(out, std::int32_t{1}), put_be(out, static_cast<std::int32_t>(i));
-  put_text(out, "\nPOINT_DATA " + std::to_string(n) + "\nVECTORS velocity float\n");
+  put_point_cloud(out, frame_title(m, time_s), n,
+                  [&](std::size_t i) { return std::array<float, 3>{pts[i].x, pts[i].y, pts[i].z}; });
+  put_text(out, "\nVECTORS velocity float\n");
   for (const Point& p : pts) put_be(out, p.vx), put_be(out, p.vy), put_be(out, p.vz);
   auto scalars = [&](const char* name, const char* type, auto get) {
     put_text(out, std::string("\nSCALARS ") + name + " " + type + " 1\nLOOKUP_TABLE default\n");
@@ -96,15 +115,36 @@ void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m
   scalars("body", "int", [](const Point& p) { return p.body; });
   scalars("id", "int", [](const Point& p) { return p.id; });
   put_text(out, "\n");
+  write_bytes_atomically(file, out);
+}
 
-  const std::filesystem::path part = file.string() + ".part";
-  {
-    std::ofstream s(part, std::ios::binary);
-    if (!s) io_error("cannot write", part);
-    s.write(out.data(), static_cast<std::streamsize>(out.size()));
-    if (!s) io_error("write failed for", part);
-  }
-  std::filesystem::rename(part, file);
+void write_vtk_bodies(const std::filesystem::path& file, const SimulationModel& m, double time_s) {
+  const std::vector<RigidBody>& bodies = m.bodies;
+  std::vector<char> out;
+  put_point_cloud(out, frame_title(m, time_s), bodies.size(), [&](std::size_t i) {
+    const Vec3& p = bodies[i].position;
+    return std::array<double, 3>{p.x, p.y, p.z};
+  });
+  auto vectors = [&](const char* name, auto get) {
+    put_text(out, std::string("\nVECTORS ") + name + " float\n");
+    for (const RigidBody& b : bodies) {
+      const Vec3 v = get(b);
+      put_be(out, static_cast<float>(v.x)), put_be(out, static_cast<float>(v.y)), put_be(out, static_cast<float>(v.z));
+    }
+  };
+  vectors("velocity", [](const RigidBody& b) { return b.linear_velocity; });
+  vectors("angular_velocity", [](const RigidBody& b) { return b.angular_velocity; });
+  vectors("fluid_force", [](const RigidBody& b) { return b.fluid_force; });
+  vectors("fluid_torque", [](const RigidBody& b) { return b.fluid_torque; });
+  vectors("coupling_force", [](const RigidBody& b) { return b.coupling_force; });
+  vectors("coupling_torque", [](const RigidBody& b) { return b.coupling_torque; });
+  put_text(out, "\nSCALARS orientation float 4\nLOOKUP_TABLE default\n");
+  for (const RigidBody& b : bodies)
+    for (double q : {b.orientation.w, b.orientation.x, b.orientation.y, b.orientation.z}) put_be(out, static_cast<float>(q));
+  put_text(out, "\nSCALARS body int 1\nLOOKUP_TABLE default\n");
+  for (std::size_t i = 0; i < bodies.size(); ++i) put_be(out, static_cast<std::int32_t>(i));
+  put_text(out, "\n");
+  write_bytes_atomically(file, out);
 }
 
 VtkFrameSeries::VtkFrameSeries(std::filesystem::path dir, double interval_s)
@@ -113,15 +153,20 @@ VtkFrameSeries::VtkFrameSeries(std::filesystem::path dir, double interval_s)
 }
 
 void VtkFrameSeries::write(const SimulationModel& model, double time_s) {
-  char name[64];
-  std::snprintf(name, sizeof name, "frame_%06d.vtk", written_);
-  write_vtk_frame(dir_ / name, model, time_s);
+  auto add = [&](const char* pattern, std::string& entries, const char* series,
+                 void (*writer)(const std::filesystem::path&, const SimulationModel&, double)) {
+    char name[64];
+    std::snprintf(name, sizeof name, pattern, written_);
+    writer(dir_ / name, model, time_s);
+    char entry[128];
+    std::snprintf(entry, sizeof entry, "%s\n    {\"name\": \"%s\", \"time\": %.9g}", entries.empty() ? "" : ",", name, time_s);
+    entries += entry;
+    write_text_atomically(dir_ / series,
+                          "{\n  \"file-series-version\": \"1.0\",\n  \"files\": [" + entries + "\n  ]\n}\n");
+  };
+  add("frame_%06d.vtk", series_entries_, "particles.vtk.series", write_vtk_frame);
+  if (!model.bodies.empty()) add("bodies_%06d.vtk", body_series_entries_, "bodies.vtk.series", write_vtk_bodies);
   ++written_;
-  char entry[128];
-  std::snprintf(entry, sizeof entry, "%s\n    {\"name\": \"%s\", \"time\": %.9g}", written_ > 1 ? "," : "", name, time_s);
-  series_entries_ += entry;
-  write_text_atomically(dir_ / "particles.vtk.series",
-                        "{\n  \"file-series-version\": \"1.0\",\n  \"files\": [" + series_entries_ + "\n  ]\n}\n");
   // A caller that looks less often than the interval (live: at the frame rate) gets one frame
   // per look, not a burst to catch up.
   next_s_ += interval_s_;

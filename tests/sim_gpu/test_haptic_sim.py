@@ -8,6 +8,7 @@ import subprocess
 import sys
 import pathlib
 
+import numpy as np
 import pytest
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
@@ -116,11 +117,24 @@ def test_batch_run_writes_every_output(binary, tmp_path):
         stated = float(f.read_bytes().split(b"\n")[1].split(b" t=")[1].split()[0])
         assert entry["time"] == pytest.approx(stated, abs=1e-6), f.name
     assert [e["time"] for e in series["files"]] == pytest.approx([0.0, 0.05, 0.1], abs=1e-9)
+    # The bodies as a series of their own, at the same times, agreeing with bodies.csv.
+    body_series = json.loads((out / "particles" / "bodies.vtk.series").read_text())
+    assert [e["name"] for e in body_series["files"]] == ["bodies_000000.vtk", "bodies_000001.vtk", "bodies_000002.vtk"]
+    assert [e["time"] for e in body_series["files"]] == [e["time"] for e in series["files"]]
+    last = read_vtk(out / "particles" / "bodies_000002.vtk")
+    assert last["points"].shape == (1, 3) and last["orientation"].shape == (1, 4)
+    for field in ("velocity", "angular_velocity", "fluid_force", "fluid_torque", "coupling_force", "coupling_torque"):
+        assert last[field].shape == (1, 3), field
+    assert np.linalg.norm(last["orientation"][0]) == pytest.approx(1.0, abs=1e-5)
 
     with open(out / "bodies.csv") as f:
         rows = list(csv.DictReader(f))
     assert list(rows[0].keys()) == "t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz".split(",")
     assert len(rows) == 10 and rows[-1]["body"] == "paddle"
+    for k, field in enumerate(("vx", "vy", "vz")):
+        assert last["velocity"][0][k] == pytest.approx(float(rows[-1][field]), rel=1e-5, abs=1e-7)
+    for k, field in enumerate(("fx", "fy", "fz")):
+        assert last["fluid_force"][0][k] == pytest.approx(float(rows[-1][field]), rel=1e-5, abs=1e-7)
     with open(out / "couplings.csv") as f:
         rows = list(csv.DictReader(f))
     assert list(rows[0].keys()) == "t,device,body,fx,fy,fz,tx,ty,tz".split(",")
@@ -196,7 +210,7 @@ def test_rerun_that_diverges_midway_leaves_nothing_that_looks_complete(binary, s
     # it has written frames: the previous run's outputs are gone, stats.json says the run did not
     # complete and why, the CSVs are .part only, and every frame is the new run's.
     out = complete_run(binary, tmp_path, "--export-every", "0.01")
-    assert len(list((out / "particles").glob("*.vtk"))) == 11
+    assert len(list((out / "particles").glob("frame_*.vtk"))) == 11
     scene = source_dir / "tests/sim_gpu/scenes/diverging_drop.toml"
     result = run(binary, scene, out, "--export-every", "0.05")
     assert result.returncode == 1, result.stderr
@@ -209,7 +223,7 @@ def test_rerun_that_diverges_midway_leaves_nothing_that_looks_complete(binary, s
     assert stats["steps"] == 110  # 11 frames of 10 steps passed the check; the 12th did not
     assert not (out / "bodies.csv").exists() and not (out / "couplings.csv").exists()
     assert (out / "bodies.csv.part").exists() and (out / "couplings.csv.part").exists()
-    frames = sorted((out / "particles").glob("*.vtk"))
+    frames = sorted((out / "particles").glob("frame_*.vtk"))
     assert [f.name for f in frames] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
     assert stats["frames_exported"] == 3
     for f in frames:
@@ -219,13 +233,14 @@ def test_rerun_that_diverges_midway_leaves_nothing_that_looks_complete(binary, s
 def test_rerun_that_succeeds_keeps_no_frame_of_the_previous_run(binary, tmp_path):
     # The previous run exported more frames than this one: none of them may remain.
     out = complete_run(binary, tmp_path, "--export-every", "0.01")
-    assert len(list((out / "particles").glob("*.vtk"))) == 11
+    assert len(list((out / "particles").glob("frame_*.vtk"))) == 11
     result = run(binary, write_scene(tmp_path / "scene"), out, "--export-every", "0.05")
     assert result.returncode == 0, result.stderr
     stats = json.loads((out / "stats.json").read_text())
     assert stats["complete"] is True and stats["frames_exported"] == 3
     assert [f.name for f in sorted((out / "particles").iterdir())] == \
-        ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk", "particles.vtk.series"]
+        ["bodies.vtk.series", "bodies_000000.vtk", "bodies_000001.vtk", "bodies_000002.vtk",
+         "frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk", "particles.vtk.series"]
     series = json.loads((out / "particles" / "particles.vtk.series").read_text())
     assert [e["name"] for e in series["files"]] == ["frame_000000.vtk", "frame_000001.vtk", "frame_000002.vtk"]
     assert not list(out.rglob("*.part"))

@@ -39,8 +39,10 @@ def read_vtk(path: pathlib.Path) -> dict:
         elif words[0] == "SCALARS":
             assert line().startswith("LOOKUP_TABLE")
             dtype = ">f4" if words[2] == "float" else ">i4"
-            out[words[1]] = np.frombuffer(data, dtype, n, pos)
-            pos += 4 * n
+            components = int(words[3]) if len(words) > 3 else 1
+            values = np.frombuffer(data, dtype, components * n, pos)
+            out[words[1]] = values.reshape(n, components) if components > 1 else values
+            pos += 4 * components * n
         else:
             raise ValueError(f"{path}: unexpected VTK section {text!r}")
     return out

@@ -15,10 +15,15 @@ namespace hapfluid::sim {
 // pressure, kind (0 fluid, 1 wall, 2 body), body index (-1 for fluid and walls) and id.
 void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& model, double time_s);
 
+// One point per body at its centre of mass: velocity, angular velocity, the fluid's and the
+// couplings' force and torque (vectors), orientation (w, x, y, z of the mesh frame) and index.
+void write_vtk_bodies(const std::filesystem::path& file, const SimulationModel& model, double time_s);
+
 // A run's particle frames: DIR/frame_NNNNNN.vtk every `interval_s` of simulated time (haptic-sim
 // --export-every, batch and live alike; 0: none), and DIR/particles.vtk.series, ParaView's file
 // series (JSON: each frame's name and simulated time, s), rewritten after every frame so that
-// ParaView's time axis is the simulated time even for a run cut short. The constructor creates
+// ParaView's time axis is the simulated time even for a run cut short. A scene with bodies gets
+// DIR/bodies_NNNNNN.vtk (write_vtk_bodies) and DIR/bodies.vtk.series beside them. The constructor creates
 // DIR; an earlier run's frames there are remove_previous_outputs' to remove, before.
 class VtkFrameSeries {
  public:
@@ -32,7 +37,7 @@ class VtkFrameSeries {
   std::filesystem::path dir_;
   double interval_s_ = 0, next_s_ = 0;
   int written_ = 0;
-  std::string series_entries_;  // the "files" entries of the series so far
+  std::string series_entries_, body_series_entries_;  // the "files" entries of each series so far
 };
 
 // A CSV file written row by row to "<file>.part" and renamed to <file> by finish().
