@@ -78,15 +78,20 @@ double measure(const std::string& sweep, const config::Scene& scene, int threads
   return ms;
 }
 
-void record_scaling(const char* solver, int particles, double ms_1, double ms_2) {
+// The pool of n particles on 1 and 2 threads; with `scaling`, a record of the speed-up too.
+void measure_pool(const std::filesystem::path& dir, int n, bool dfsph, bool scaling, int steps) {
+  const double ms_1 = measure("pool", pool_scene(dir, n, n, {}, dfsph), 1, steps, "");
+  const double ms_2 = measure("pool", pool_scene(dir, n, n, {}, dfsph), 2, steps, "");
+  if (!scaling) return;
+  const char* solver = dfsph ? "dfsph" : "wcsph";
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "{\"bench\": \"bench_sim_cpu\", \"params\": {\"backend\": \"cpu\", \"sweep\": \"scaling\", \"solver\": \"%s\", "
                 "\"particles_requested\": %d}, \"metrics\": {\"ms_per_step_1_thread\": %.3f, \"ms_per_step_2_threads\": %.3f, "
                 "\"speedup_2_threads\": %.3f}}",
-                solver, particles, ms_1, ms_2, ms_1 / ms_2);
+                solver, n, ms_1, ms_2, ms_1 / ms_2);
   records.push_back({buf});
-  std::fprintf(stderr, "bench_sim_cpu: %s pool of %d, 2 threads are %.2fx one\n", solver, particles, ms_1 / ms_2);
+  std::fprintf(stderr, "bench_sim_cpu: %s pool of %d, 2 threads are %.2fx one\n", solver, n, ms_1 / ms_2);
 }
 
 }  // namespace
@@ -114,17 +119,8 @@ int main(int argc, char** argv) {
   try {
     // Fluid pool, fig. 6a.
     const std::vector<int> sizes = quick ? std::vector<int>{8000, 32000} : std::vector<int>{8000, 16000, 32000, 64000};
-    for (int n : sizes) {
-      const double ms_1 = measure("pool", pool_scene(dir, n, n, {}), 1, steps, "");
-      const double ms_2 = measure("pool", pool_scene(dir, n, n, {}), 2, steps, "");
-      if (n == 32000) record_scaling("wcsph", n, ms_1, ms_2);
-    }
-    {
-      const int n = 32000;
-      const double ms_1 = measure("pool", pool_scene(dir, n, n, {}, true), 1, steps, "");
-      const double ms_2 = measure("pool", pool_scene(dir, n, n, {}, true), 2, steps, "");
-      record_scaling("dfsph", n, ms_1, ms_2);
-    }
+    for (int n : sizes) measure_pool(dir, n, false, n == 32000, steps);
+    measure_pool(dir, 32000, true, true, steps);
     // Fig. 6b: one sphere of 1k..20k particles in a 25k-particle scene.
     const int total = 25000;
     const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};

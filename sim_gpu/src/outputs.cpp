@@ -43,12 +43,12 @@ void put_point_cloud(std::vector<char>& out, const std::string& title, std::size
   put_text(out, "\nPOINT_DATA " + std::to_string(n));
 }
 
-void write_bytes_atomically(const std::filesystem::path& file, const std::vector<char>& bytes) {
+void write_bytes_atomically(const std::filesystem::path& file, const char* bytes, std::size_t size) {
   const std::filesystem::path part = file.string() + ".part";
   {
     std::ofstream s(part, std::ios::binary);
     if (!s) io_error("cannot write", part);
-    s.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    s.write(bytes, static_cast<std::streamsize>(size));
     if (!s) io_error("write failed for", part);
   }
   std::filesystem::rename(part, file);
@@ -61,7 +61,7 @@ std::string frame_title(const SimulationModel& m, double time_s) {
 }  // namespace
 
 void write_text_atomically(const std::filesystem::path& file, const std::string& text) {
-  write_bytes_atomically(file, std::vector<char>(text.begin(), text.end()));
+  write_bytes_atomically(file, text.data(), text.size());
 }
 
 void remove_previous_outputs(const std::filesystem::path& dir) {
@@ -115,7 +115,7 @@ void write_vtk_frame(const std::filesystem::path& file, const SimulationModel& m
   scalars("body", "int", [](const Point& p) { return p.body; });
   scalars("id", "int", [](const Point& p) { return p.id; });
   put_text(out, "\n");
-  write_bytes_atomically(file, out);
+  write_bytes_atomically(file, out.data(), out.size());
 }
 
 void write_vtk_bodies(const std::filesystem::path& file, const SimulationModel& m, double time_s) {
@@ -144,7 +144,7 @@ void write_vtk_bodies(const std::filesystem::path& file, const SimulationModel& 
   put_text(out, "\nSCALARS body int 1\nLOOKUP_TABLE default\n");
   for (std::size_t i = 0; i < bodies.size(); ++i) put_be(out, static_cast<std::int32_t>(i));
   put_text(out, "\n");
-  write_bytes_atomically(file, out);
+  write_bytes_atomically(file, out.data(), out.size());
 }
 
 VtkFrameSeries::VtkFrameSeries(std::filesystem::path dir, double interval_s)

@@ -17,6 +17,7 @@ inline void cpu_relax() {
 // Spins until done() holds or `ns` have passed; true if done() held.
 template <class Done>
 bool spin_until(Done&& done, long ns) {
+  if (done()) return true;  // the common hand-off: no clock read
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::nanoseconds(ns);
   for (;;) {
     for (int k = 0; k < 64; ++k) {

@@ -23,8 +23,9 @@ void write_vtk_bodies(const std::filesystem::path& file, const SimulationModel& 
 // --export-every, batch and live alike; 0: none), and DIR/particles.vtk.series, ParaView's file
 // series (JSON: each frame's name and simulated time, s), rewritten after every frame so that
 // ParaView's time axis is the simulated time even for a run cut short. A scene with bodies gets
-// DIR/bodies_NNNNNN.vtk (write_vtk_bodies) and DIR/bodies.vtk.series beside them. The constructor creates
-// DIR; an earlier run's frames there are remove_previous_outputs' to remove, before.
+// DIR/bodies_NNNNNN.vtk (write_vtk_bodies) and DIR/bodies.vtk.series beside them. The
+// constructor creates DIR; an earlier run's frames there are remove_previous_outputs' to remove,
+// before.
 class VtkFrameSeries {
  public:
   VtkFrameSeries(std::filesystem::path dir, double interval_s);
