@@ -16,17 +16,29 @@ Writes a JSON list of {"bench", "params", "metrics"} records: one per case and c
 ratio hapfluid / SPlisHSPlasH per case (> 1: hapfluid is slower). Runs are kept in
 OUT_DIR/splishsplash/<case>/ (scene JSON, splash.log, stats.json).
 
+A case of AT_REST_CASES is a tank of water at rest: both codes settle it alike (the scene's
+fluid.settle_s, velocities x 0.8 after each step; for SPlisHSPlasH through its Python API,
+splishsplash_at_rest.py), at the scene's viscosity (mu / rho0 as SPlisHSPlasH's coefficient),
+then run it free for its duration_s. Its records give the rms and largest fluid speed at the end
+and over the last second, each code's samples go to <case>/<code>/speeds.csv and both to
+<case>/speeds.png.
+
     bench_splishsplash.py --build build --out out/bench/bench_splishsplash.json [--case dam_break]
 """
 import argparse
+import csv
 import json
+import math
 import os
 import pathlib
 import subprocess
 import sys
 import time
 
+import numpy as np
+
 import splishsplash
+import vtk_frames
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {
@@ -35,6 +47,12 @@ CASES = {
     "dam_break_dfsph": ROOT / "sim_gpu/bench/dam_break_dfsph.toml",
     "pool_32k_dfsph": ROOT / "sim_gpu/bench/pool_32k_dfsph.toml",
 }
+# Cases judged by how still the fluid stays, not by cost (below).
+AT_REST_CASES = {
+    "tank_at_rest_dfsph": ROOT / "sim_gpu/bench/tank_at_rest_dfsph.toml",
+}
+AT_REST_EXPORT_EVERY_S = 0.1  # hapfluid's frames, as often as splishsplash_at_rest.py samples
+AT_REST_LAST_S = 1.0          # the summary's window: the last second of the run
 THREADS = 2
 RUN_TIMEOUT_S = 1800
 
@@ -136,11 +154,109 @@ def summary_line(code: str, run: dict) -> str:
             f"load average {run['load_average_1min']:.1f} before")
 
 
+def hapfluid_at_rest(build: pathlib.Path, scene: pathlib.Path, duration_s: float, out: pathlib.Path) -> list:
+    """haptic-sim on a tank at rest: [(t, rms speed, max speed, mean density)] of its fluid, from
+    its VTK frames (kind 0 is fluid), and its solver iterations per step (stats.json)."""
+    command = [str(build / "bin/haptic-sim"), "--scene", str(scene), "--backend", "cpu", "--duration", repr(duration_s),
+               "--out", str(out), "--threads", str(THREADS), "--export-every", repr(AT_REST_EXPORT_EVERY_S)]
+    result = subprocess.run(command, timeout=RUN_TIMEOUT_S)
+    if result.returncode != 0:
+        raise RuntimeError(f"haptic-sim on {scene} exited {result.returncode}")
+    rows = []
+    for t, path in vtk_frames.read_series(out / "particles"):
+        frame = vtk_frames.read_vtk(path)
+        fluid = frame["kind"] == 0
+        speed = np.linalg.norm(frame["velocity"][fluid], axis=1)
+        rows.append((t, math.sqrt(float(np.mean(speed ** 2))), float(speed.max()), float(frame["density"][fluid].mean())))
+    write_speeds(out / "speeds.csv", rows)
+    iterations = json.loads((out / "stats.json").read_text()).get("solver_iterations", {})
+    return rows, {"mean_pressure_iterations": iterations.get("density_per_step"),
+                  "mean_divergence_iterations": iterations.get("divergence_per_step")}
+
+
+def write_speeds(path: pathlib.Path, rows: list):
+    with path.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(["t_s", "rms_speed_m_s", "max_speed_m_s", "mean_density_kg_m3"])
+        writer.writerows(rows)
+
+
+def at_rest_metrics(rows: list, duration_s: float, rest_density: float) -> dict:
+    last = [r for r in rows if r[0] >= duration_s - AT_REST_LAST_S - 1e-9]
+    if not last:
+        raise ValueError(f"no samples in the last {AT_REST_LAST_S} s of {duration_s} s")
+    return {
+        "samples": len(rows),
+        "rms_speed_final_m_s": rows[-1][1],
+        "max_speed_final_m_s": rows[-1][2],
+        "rms_speed_last_s_m_s": math.sqrt(sum(r[1] ** 2 for r in last) / len(last)),
+        "max_speed_last_s_m_s": max(r[2] for r in last),
+        "max_speed_after_settling_m_s": max(r[2] for r in rows),
+        "mean_density_error_final": rows[-1][3] / rest_density - 1.0,
+    }
+
+
+def plot_speeds(path: pathlib.Path, name: str, runs: dict):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for (code, rows), colour in zip(runs.items(), ("tab:blue", "tab:orange")):
+        t = [r[0] for r in rows]
+        ax.plot(t, [r[1] for r in rows], color=colour, label=f"{code} rms")
+        ax.plot(t, [r[2] for r in rows], color=colour, linestyle="--", label=f"{code} max")
+    ax.axhline(0.01, color="grey", linewidth=0.8, label="0.01 m/s")
+    ax.set_yscale("log")
+    ax.set_xlabel("time after settling (s)")
+    ax.set_ylabel("fluid speed (m/s)")
+    ax.set_title(f"{name}: water at rest, same settling")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+def at_rest_case(name: str, scene: pathlib.Path, build: pathlib.Path, work: pathlib.Path) -> list:
+    case = splishsplash.load_case(scene)
+    duration = case["duration_s"]
+    progress(f"{name}: hapfluid, {scene.relative_to(ROOT)}, settled {case['settle_s']} s, then {duration} s at rest ...")
+    (work / "hapfluid").mkdir(parents=True, exist_ok=True)
+    ours, our_iterations = hapfluid_at_rest(build, scene, duration, work / "hapfluid")
+    out = work / "splishsplash"
+    out.mkdir(parents=True, exist_ok=True)
+    box = out / "box.obj"
+    box.write_text(splishsplash.UNIT_BOX_OBJ)
+    nu = splishsplash.scene_kinematic_viscosity(scene)
+    scene_path = out / "scene.json"
+    scene_path.write_text(json.dumps(splishsplash.scene_json(scene, box, kinematic_viscosity=nu), indent=2) + "\n")
+    progress(f"{name}: SPlisHSPlasH DFSPH, same tank, viscosity {nu:g} m^2/s, same settling ...")
+    theirs, their_iterations = splishsplash.run_at_rest(scene_path, case["settle_s"], duration, out, THREADS, RUN_TIMEOUT_S)
+    plot_speeds(work / "speeds.png", name, {"hapfluid": ours, "SPlisHSPlasH": theirs})
+    records = []
+    for code, rows, iterations in (("hapfluid", ours, our_iterations), ("splishsplash", theirs, their_iterations)):
+        metrics = at_rest_metrics(rows, duration, case["rest_density_kg_m3"])
+        metrics.update({k: v for k, v in iterations.items() if v is not None})
+        records.append({"bench": "bench_splishsplash",
+                        "params": {"case": name, "code": code, "solver": "dfsph", "threads": THREADS,
+                                   "settle_s": case["settle_s"], "duration_s": duration,
+                                   "kinematic_viscosity_m2_s": nu},
+                        "metrics": metrics})
+        progress(f"{name}: {code}: last {AT_REST_LAST_S} s rms {metrics['rms_speed_last_s_m_s']:.4f} m/s, "
+                 f"max {metrics['max_speed_last_s_m_s']:.4f} m/s")
+    h, s = records[0]["metrics"], records[1]["metrics"]
+    records.append({"bench": "bench_splishsplash",
+                    "params": {"case": name, "code": "hapfluid/splishsplash", "solver": "dfsph/dfsph", "threads": THREADS},
+                    "metrics": {"ratio_rms_speed_last_s": h["rms_speed_last_s_m_s"] / s["rms_speed_last_s_m_s"],
+                                "ratio_max_speed_last_s": h["max_speed_last_s_m_s"] / s["max_speed_last_s_m_s"]}})
+    return records
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--build", type=pathlib.Path, default=ROOT / "build")
     parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--case", action="append", choices=sorted(CASES), help="run only this case (repeatable)")
+    parser.add_argument("--case", action="append", choices=sorted(CASES) + sorted(AT_REST_CASES),
+                        help="run only this case (repeatable)")
     args = parser.parse_args()
     try:
         splishsplash.gl_dispatch_preload()
@@ -148,7 +264,13 @@ def main():
         sys.exit(f"bench_splishsplash: {error}")
     work = args.out.resolve().parent / "splishsplash"
     records = []
-    for name in args.case or list(CASES):
+    for name in args.case or list(CASES) + list(AT_REST_CASES):
+        if name in AT_REST_CASES:
+            try:
+                records += at_rest_case(name, AT_REST_CASES[name], args.build.resolve(), work / name)
+            except (RuntimeError, ValueError, OSError, subprocess.TimeoutExpired) as error:
+                sys.exit(f"bench_splishsplash: {name}: {error}")
+            continue
         scene = CASES[name]
         duration = splishsplash.load_case(scene)["duration_s"]
         try:

@@ -10,6 +10,7 @@ Three things, each a function of its inputs except `run`:
 Coordinates are ours (z up): SPlisHSPlasH takes any gravity vector, so nothing is rotated and
 the JSON's numbers can be compared with the TOML's directly.
 """
+import csv
 import glob
 import importlib.util
 import math
@@ -34,6 +35,8 @@ WATER_VISCOSITY = 0.01  # SPlisHSPlasH's standard viscosity coefficient in its w
 VOLUME_MAP_PADDING_SUPPORTS = 8
 VOLUME_MAP_CELL_SUPPORTS = 2
 DEFAULT_MAX_DT_S = 0.002  # hapfluid's time.max_dt_s default (config/include/hapfluid/config/scene.hpp)
+DEFAULT_SETTLE_S = 0.5    # its fluid.settle_s default (the same header)
+SETTLE_VELOCITY_KEPT = 0.8  # the velocity fraction its settling keeps after each step (sim_gpu/src/dfsph_solver.cpp)
 
 # A unit cube centred on the origin, faces wound outward; scaled and moved onto the domain box.
 UNIT_BOX_OBJ = """# unit cube centred on the origin (hapfluid bench: SPlisHSPlasH wall box)
@@ -105,12 +108,16 @@ def load_case(scene_toml: pathlib.Path) -> dict:
         "rest_density_kg_m3": float(fluid.get("rest_density_kg_m3", 1000.0)),
         "gravity_m_s2": _vec3(fluid, "gravity_m_s2", f"{path}: fluid") if "gravity_m_s2" in fluid else (0.0, 0.0, -9.81),
         "max_dt_s": float(time_table.get("max_dt_s", DEFAULT_MAX_DT_S)),
+        "viscosity_pa_s": float(fluid.get("viscosity_pa_s", 0.0)),
+        "settle_s": float(fluid.get("settle_s", DEFAULT_SETTLE_S)),
         "blocks": blocks,
     }
 
 
-def scene_json(scene_toml: pathlib.Path, box_obj: pathlib.Path) -> dict:
+def scene_json(scene_toml: pathlib.Path, box_obj: pathlib.Path, kinematic_viscosity: float = WATER_VISCOSITY) -> dict:
     """SPlisHSPlasH's scene for the case of `scene_toml`; `box_obj` is where UNIT_BOX_OBJ is written.
+    `kinematic_viscosity` (m^2/s) is its standard viscosity's coefficient: by default that of its
+    own water scenes; `scene_kinematic_viscosity` gives the scene's fluid.viscosity_pa_s / rho0.
 
     Fluid: the TOML's blocks as they are. SPlisHSPlasH fills a block one particle diameter in
     from each face (start + d, ..., end - d), hapfluid from half a spacing in, so it starts
@@ -152,7 +159,7 @@ def scene_json(scene_toml: pathlib.Path, box_obj: pathlib.Path) -> dict:
             "id": "Fluid",
             "density0": case["rest_density_kg_m3"],
             "viscosityMethod": VISCOSITY_STANDARD,
-            "Standard viscosity": {"viscosity": WATER_VISCOSITY},
+            "Standard viscosity": {"viscosity": kinematic_viscosity},
         }],
         "RigidBodies": [{
             "geometryFile": str(pathlib.Path(box_obj).resolve()),
@@ -205,6 +212,12 @@ def parse_timing_summary(text: str) -> dict:
     return found
 
 
+def scene_kinematic_viscosity(scene_toml: pathlib.Path) -> float:
+    """The scene's fluid viscosity as SPlisHSPlasH's coefficient: mu / rho0, m^2/s."""
+    case = load_case(scene_toml)
+    return case["viscosity_pa_s"] / case["rest_density_kg_m3"]
+
+
 def installed_package_dir() -> pathlib.Path:
     spec = importlib.util.find_spec("pysplishsplash")
     if spec is None or spec.origin is None:
@@ -237,3 +250,35 @@ def run(scene_path: pathlib.Path, stop_at_s: float, out_dir: pathlib.Path, threa
     summary = parse_timing_summary(result.stdout)
     summary["process_wall_s"] = wall
     return summary
+
+
+AT_REST_DRIVER = pathlib.Path(__file__).resolve().parent / "splishsplash_at_rest.py"
+
+
+def run_at_rest(scene_path: pathlib.Path, settle_s: float, duration_s: float, out_dir: pathlib.Path, threads: int,
+                timeout_s: float) -> tuple:
+    """SPlisHSPlasH on a tank at rest (splishsplash_at_rest.py): settled for `settle_s` as hapfluid
+    settles, then `duration_s` free. Returns its samples [(t, rms speed, max speed, mean density)]
+    and its mean DFSPH iterations per step ({"mean_pressure_iterations", "mean_divergence_iterations"},
+    over the whole run, settling included)."""
+    out_dir = pathlib.Path(out_dir)
+    speeds = out_dir / "speeds.csv"
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), LD_PRELOAD=gl_dispatch_preload())
+    command = [sys.executable, str(AT_REST_DRIVER), str(pathlib.Path(scene_path).resolve()), "--settle-s", repr(settle_s),
+               "--kept", repr(SETTLE_VELOCITY_KEPT), "--duration", repr(duration_s), "--out", str(speeds.resolve()),
+               "--output-dir", str(out_dir.resolve())]
+    result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout_s)
+    (out_dir / "splash.log").write_text(result.stdout + result.stderr)
+    if result.returncode != 0:
+        raise RuntimeError(f"{AT_REST_DRIVER.name} on {scene_path} exited {result.returncode}: "
+                           f"{(result.stderr or result.stdout)[-2000:]}")
+    with speeds.open() as f:
+        rows = list(csv.DictReader(f))
+    samples = [(float(r["t_s"]), float(r["rms_speed_m_s"]), float(r["max_speed_m_s"]), float(r["mean_density_kg_m3"]))
+               for r in rows]
+    iterations = {}
+    for key in ("mean_pressure_iterations", "mean_divergence_iterations"):
+        found = re.findall(_SUMMARY[key], result.stdout, flags=re.MULTILINE)
+        if found:
+            iterations[key] = float(found[-1])
+    return samples, iterations

@@ -15,8 +15,7 @@ import pytest
 
 from hil_stack import ROOT
 
-sys.path.insert(0, str(ROOT / "tests" / "sim_gpu"))
-from vtk_reader import read_vtk  # noqa: E402
+from vtk_frames import read_vtk  # noqa: E402  (scripts/, on the path through hil_stack)
 
 FRAME_W, FRAME_H = 640, 480  # the launcher renders at this size
 VTK_EVERY_S = 0.5            # the launcher's --export-every default
@@ -97,7 +96,7 @@ def test_the_rendered_frames_decode_at_the_launchers_size_and_show_the_fluid(ren
 
 
 def test_the_vtk_particle_frames_parse_and_hold_the_whole_fluid(rendered_run):
-    # ParaView reads what tests/sim_gpu/vtk_reader.py reads (legacy binary POLYDATA). Every frame
+    # ParaView reads what scripts/vtk_frames.py reads (legacy binary POLYDATA). Every frame
     # holds every fluid particle, finite and inside the domain (0.40 x 0.22 m, walls at the edge),
     # one frame per 0.5 s of simulated time.
     out, result, summary = rendered_run

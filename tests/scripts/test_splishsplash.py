@@ -111,3 +111,39 @@ def test_support_radius_other_than_two_spacings_is_refused(splishsplash, tmp_pat
                      'support_radius_m = 0.05\n[[fluid.blocks]]\nmin_m = [0,0,0]\nmax_m = [1,1,0.5]\n')
     with pytest.raises(splishsplash.SceneError, match=r"wide\.toml: fluid\.support_radius_m = 0\.05"):
         splishsplash.load_case(scene)
+
+
+def test_tank_at_rest_runs_at_the_scenes_water_viscosity_and_settling(splishsplash, source_dir, tmp_path):
+    # The rest comparison gives SPlisHSPlasH the scene's viscosity, mu / rho0 (water: 1e-6 m^2/s),
+    # not the 0.01 of its own water scenes, and settles it for the scene's fluid.settle_s.
+    scene = source_dir / "sim_gpu/bench/tank_at_rest_dfsph.toml"
+    case = splishsplash.load_case(scene)
+    assert case["settle_s"] == 0.5 and case["duration_s"] == 5.0
+    nu = splishsplash.scene_kinematic_viscosity(scene)
+    assert nu == pytest.approx(0.001 / 1000.0)
+    json_scene = splishsplash.scene_json(scene, tmp_path / "box.obj", kinematic_viscosity=nu)
+    assert json_scene["Materials"][0]["Standard viscosity"]["viscosity"] == pytest.approx(1e-6)
+    assert json_scene["Configuration"]["cflMaxTimeStepSize"] == 0.005
+    default = splishsplash.scene_json(scene, tmp_path / "box.obj")
+    assert default["Materials"][0]["Standard viscosity"]["viscosity"] == splishsplash.WATER_VISCOSITY
+
+
+def test_settling_default_and_kept_fraction_are_hapfluids(splishsplash, source_dir):
+    # Both codes must settle alike: the constants the comparison copies are the solver's own.
+    header = (source_dir / "config/include/hapfluid/config/scene.hpp").read_text()
+    assert f"double settle_s = {splishsplash.DEFAULT_SETTLE_S};" in header
+    solver = (source_dir / "sim_gpu/src/dfsph_solver.cpp").read_text()
+    assert f"constexpr float kSettleVelocityKept = {splishsplash.SETTLE_VELOCITY_KEPT}f;" in solver
+
+
+def test_at_rest_summary_is_the_last_seconds_rms_and_largest_speed(script):
+    bench = script("bench_splishsplash")
+    rows = [(0.0, 0.01, 0.05, 1000.0), (3.9, 0.5, 0.9, 1000.0), (4.0, 0.03, 0.2, 1001.0), (4.5, 0.04, 0.1, 1001.0),
+            (5.0, 0.0, 0.3, 1002.0)]
+    m = bench.at_rest_metrics(rows, 5.0, 1000.0)
+    assert m["rms_speed_last_s_m_s"] == pytest.approx(math.sqrt((0.03 ** 2 + 0.04 ** 2 + 0.0) / 3))
+    assert m["max_speed_last_s_m_s"] == 0.3
+    assert m["max_speed_after_settling_m_s"] == 0.9
+    assert m["rms_speed_final_m_s"] == 0.0 and m["mean_density_error_final"] == pytest.approx(0.002)
+    with pytest.raises(ValueError, match="no samples in the last 1.0 s of 10.0 s"):
+        bench.at_rest_metrics(rows, 10.0, 1000.0)

@@ -11,8 +11,8 @@ import pathlib
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
-from vtk_reader import read_vtk  # noqa: E402
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "scripts"))
+from vtk_frames import read_vtk  # noqa: E402
 
 BOX_OBJ = """v 0 0 0
 v 0.04 0 0

@@ -1,4 +1,6 @@
-"""Reads the legacy binary VTK frames haptic-sim writes (POLYDATA points + point data)."""
+"""Reads the legacy binary VTK frames haptic-sim writes (POLYDATA points + point data), and the
+ParaView `.vtk.series` index beside them. A file in another layout is a ValueError naming it."""
+import json
 import pathlib
 
 import numpy as np
@@ -16,8 +18,8 @@ def read_vtk(path: pathlib.Path) -> dict:
         return text
 
     header = [line() for _ in range(4)]
-    assert header[0].startswith("# vtk DataFile"), header
-    assert header[2] == "BINARY" and header[3] == "DATASET POLYDATA", header
+    if not header[0].startswith("# vtk DataFile") or header[2] != "BINARY" or header[3] != "DATASET POLYDATA":
+        raise ValueError(f"{path}: not a binary legacy VTK POLYDATA file (header {header!r})")
     out = {"title": header[1]}
     n = 0
     while pos < len(data):
@@ -37,7 +39,8 @@ def read_vtk(path: pathlib.Path) -> dict:
             out[words[1]] = np.frombuffer(data, ">f4", 3 * n, pos).reshape(n, 3)
             pos += 12 * n
         elif words[0] == "SCALARS":
-            assert line().startswith("LOOKUP_TABLE")
+            if not line().startswith("LOOKUP_TABLE"):
+                raise ValueError(f"{path}: SCALARS {words[1]} without its LOOKUP_TABLE line")
             dtype = ">f4" if words[2] == "float" else ">i4"
             components = int(words[3]) if len(words) > 3 else 1
             values = np.frombuffer(data, dtype, components * n, pos)
@@ -46,3 +49,13 @@ def read_vtk(path: pathlib.Path) -> dict:
         else:
             raise ValueError(f"{path}: unexpected VTK section {text!r}")
     return out
+
+
+def read_series(particles_dir: pathlib.Path, name: str = "particles.vtk.series") -> list:
+    """[(simulated time s, frame path)] of a `.vtk.series` index, in its order."""
+    index = pathlib.Path(particles_dir) / name
+    try:
+        files = json.loads(index.read_text())["files"]
+        return [(float(f["time"]), pathlib.Path(particles_dir) / f["name"]) for f in files]
+    except (OSError, ValueError, KeyError, TypeError) as error:
+        raise ValueError(f"{index}: not a readable .vtk.series index: {error}") from error
