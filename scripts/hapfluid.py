@@ -469,6 +469,7 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
     stats_path = out / "sim" / "stats.json"
     if stats_path.exists():
         stats = json.loads(stats_path.read_text())
+        summary["build_id"] = stats.get("build_id", "")
         summary["sim_steps_per_s"] = round(stats["steps_per_s"], 1)
         summary["real_time_factor"] = round(stats["real_time_factor"], 3)
         summary["sim_kept_up"] = stats["kept_up_with_wall_clock"]

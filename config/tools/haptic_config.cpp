@@ -1,69 +1,51 @@
 // haptic-config: validates rig and scene files before a rig ever moves.
 //
-//   haptic-config check FILE...          validate each file (rig or scene, told apart by content)
-//   haptic-config check --rig R SCENE... also check that the scenes' live devices exist in rig R
+//   haptic-config check FILE...                 validate each file (rig or scene, told by its keys)
+//   haptic-config check --rig R SCENE...        also check that the scenes' live devices exist in rig R
+//   haptic-config check --kind scene FILE...    read every FILE as a scene (or rig), whatever its keys
 //
-// Prints one line per problem ("file:line: key = value: reason") and exits 1 if there was any.
+// Prints one line per problem ("file:line: key = value: reason") and exits 1 if there was any;
+// a usage error exits 2.
 #include <cstdio>
-#include <cstring>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
+#include "hapfluid/config/file_kind.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/config/scene.hpp"
 
 using namespace hapfluid::config;
 
-namespace {
-
-int usage() {
-  std::fprintf(stderr,
-               "usage: haptic-config check [--rig RIG.toml] FILE...\n"
-               "  Validates hapfluid rig and scene files (TOML, SI units).\n");
-  return 2;
-}
-
-// A scene has a [fluid] or [domain] table; anything else is read as a rig.
-bool looks_like_scene(const std::string& path) {
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    size_t start = line.find_first_not_of(" \t");
-    if (start == std::string::npos) continue;
-    if (line.compare(start, 7, "[fluid]") == 0 || line.compare(start, 8, "[domain]") == 0 ||
-        line.compare(start, 6, "[fluid") == 0)
-      return true;
-  }
-  return false;
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
-  if (argc < 3 || std::strcmp(argv[1], "check") != 0) return usage();
-  std::string rig_path;
+  CLI::App app{"Validates hapfluid rig and scene files (TOML, SI units; docs/config-reference.md).", "haptic-config"};
+  add_version_flag(app);
+  app.require_subcommand(1, 1);
+  CLI::App* check = app.add_subcommand("check", "validate each file; one line per problem, exit 1 if any");
+  std::string rig_path, kind_name = "auto";
   std::vector<std::string> files;
-  for (int i = 2; i < argc; ++i) {
-    if (std::strcmp(argv[i], "--rig") == 0 && i + 1 < argc) {
-      rig_path = argv[++i];
-      files.push_back(rig_path);
-    } else if (argv[i][0] == '-') {
-      return usage();
-    } else {
-      files.push_back(argv[i]);
-    }
+  check->add_option("--rig", rig_path, "a rig file: also check that the scenes' rig devices exist in it");
+  check->add_option("--kind", kind_name, "read every FILE as this kind, or tell each from its keys")
+      ->check(CLI::IsMember({"auto", "rig", "scene"}))
+      ->capture_default_str();
+  check->add_option("files", files, "rig and scene files (TOML)");
+  if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
+  if (!rig_path.empty()) files.insert(files.begin(), rig_path);
+  if (files.empty()) {
+    std::fprintf(stderr, "haptic-config: check: no FILE given (haptic-config --help for usage)\n");
+    return kUsageExitCode;
   }
-  if (files.empty()) return usage();
 
   int bad = 0;
   Rig rig;
   bool have_rig = false;
   for (const auto& file : files) {
     try {
-      if (looks_like_scene(file)) {
+      FileKind kind = file == rig_path ? FileKind::rig : kind_name == "rig" ? FileKind::rig
+                      : kind_name == "scene"                               ? FileKind::scene
+                                                                           : detect_file_kind(file);
+      if (kind == FileKind::scene) {
         Scene scene = load_scene(file);
         std::vector<Problem> problems;
         if (have_rig) {

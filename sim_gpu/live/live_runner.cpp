@@ -15,6 +15,7 @@
 #include <sstream>
 #include <vector>
 
+#include "hapfluid/config/build_id.hpp"
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/config/scene.hpp"
@@ -146,7 +147,8 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
   std::ostringstream j;
   j << "{\n  \"mode\": \"live\",\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
   if (!error.empty()) j << "  \"error\": \"" << json_escape(error) << "\",\n";
-  j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
+  j << "  \"build_id\": \"" << json_escape(config::build_id()) << "\",\n"
+    << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
     << "  \"backend\": \"" << solver.backend() << "\",\n"
     << "  \"device\": {\"name\": \"" << json_escape(device.name) << "\", \"type\": \"" << json_escape(device.type)
     << "\", \"driver\": \"" << json_escape(device.driver) << "\"},\n"

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hapfluid/config/build_id.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/thread_pool.hpp"
@@ -31,7 +32,8 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
   std::ostringstream j;
   j << "{\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
   if (!complete) j << "  \"error\": \"" << json_escape(error) << "\",\n";
-  j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
+  j << "  \"build_id\": \"" << json_escape(config::build_id()) << "\",\n"
+    << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
     << "  \"backend\": \"" << o.backend << "\",\n"
     << "  \"solver\": \"" << solver.method() << "\",\n"
     << "  \"threads\": " << solver.threads() << ",\n"

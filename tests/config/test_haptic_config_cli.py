@@ -2,6 +2,7 @@
 file validates; each class of broken file is rejected with a message naming file, line, key,
 value and reason, and a non-zero exit code."""
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -100,3 +101,51 @@ def test_shipped_meshes_are_exactly_what_the_generator_makes(source_dir, tmp_pat
     for generated in tmp_path.glob("*.obj"):
         shipped = source_dir / "config" / "meshes" / generated.name
         assert shipped.read_text() == generated.read_text(), f"{shipped} is stale: run scripts/gen_meshes.py"
+
+
+def test_kind_comes_from_the_schema_not_from_the_text(binary, tmp_path):
+    # A comment or a string that mentions [fluid] does not make a rig a scene.
+    rig = tmp_path / "rig.toml"
+    rig.write_text('# copied from a scene: [fluid]\n[rt]\nperiod_ns = 1_000_000\n[[devices]]\nname = "a"\n'
+                   'transport = { kind = "loopback", address = "/tmp/a" }\n')
+    result = check(binary, rig)
+    assert result.returncode == 0 and 'ok (rig "rig"' in result.stdout, result.stderr
+
+
+def test_a_file_with_keys_of_both_schemas_is_refused_naming_them(binary, tmp_path):
+    mixed = tmp_path / "mixed.toml"
+    mixed.write_text('[rt]\nperiod_ns = 1_000_000\n[domain]\nmin_m = [0, 0, 0]\nmax_m = [1, 1, 1]\n')
+    result = check(binary, mixed)
+    assert result.returncode == 1
+    assert "mixed.toml: has keys of both a rig (rt) and a scene (domain)" in result.stderr
+    assert "--kind" in result.stderr
+
+
+def test_kind_can_be_given(binary, tmp_path, source_dir):
+    # Read as a scene, a rig has no [domain] or [fluid]: the scene schema's own messages.
+    rig = source_dir / "config/rigs/fake_single.toml"
+    result = subprocess.run([str(binary("haptic-config")), "check", "--kind", "scene", str(rig)],
+                            capture_output=True, text=True)
+    assert result.returncode == 1 and "fake_single.toml:1: domain: missing" in result.stderr, result.stderr
+    result = subprocess.run([str(binary("haptic-config")), "check", "--kind", "rig", str(rig)],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.parametrize("args, named", [(["check", "--bogus", "x"], "--bogus"), (["check", "--kind", "fish", "x"], "--kind"),
+                                          ([], "subcommand"), (["check"], "no FILE")])
+def test_usage_errors_exit_2_with_one_line_naming_the_option(binary, args, named):
+    result = subprocess.run([str(binary("haptic-config")), *args], capture_output=True, text=True)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and named in lines[0] and lines[0].startswith("haptic-config: "), result.stderr
+
+
+def test_help_goes_to_stdout_and_version_names_the_build(binary):
+    result = subprocess.run([str(binary("haptic-config")), "--help"], capture_output=True, text=True)
+    assert result.returncode == 0 and "Usage: haptic-config" in result.stdout and result.stderr == ""
+    result = subprocess.run([str(binary("haptic-config")), "check", "--help"], capture_output=True, text=True)
+    assert result.returncode == 0 and "--kind" in result.stdout
+    result = subprocess.run([str(binary("haptic-config")), "--version"], capture_output=True, text=True)
+    assert result.returncode == 0
+    assert re.fullmatch(r"haptic-config \d+\.\d+\.\d+\+git\.\S+\n", result.stdout), result.stdout

@@ -65,6 +65,7 @@ def test_a_short_live_run_leaves_its_outputs_and_nothing_else(build_dir, tmp_pat
         assert (out / name).exists() and (out / name).stat().st_size > 0, name
     summary = json.loads((out / "summary.json").read_text())
     assert summary["ok"] and summary["sim_steps_per_s"] > 0 and summary["max_force_on_hand_n"]["hand"] > 0
+    assert summary["build_id"] == json.loads((out / "sim/stats.json").read_text())["build_id"]
     assert "p99" in summary["wake_latency_us"]
     assert "steps/s" in result.stdout and "wake latency" in result.stdout and "max force on the hand" in result.stdout
     # --no-cyclictest: the loop's latency alone, said so; no cyclictest output left behind.

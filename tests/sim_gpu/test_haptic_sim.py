@@ -93,6 +93,9 @@ def test_batch_run_writes_every_output(binary, tmp_path):
     stats = json.loads((out / "stats.json").read_text())
     assert stats["complete"] is True
     assert stats["backend"] == "cpu"
+    # Which build wrote it: the id `haptic-config --version` prints (both link the same library).
+    version = subprocess.run([str(binary("haptic-config")), "--version"], capture_output=True, text=True).stdout.split()
+    assert stats["build_id"] == version[1]
     assert stats["particles"]["fluid"] > 500 and stats["particles"]["body"] > 20
     assert abs(stats["simulated_time_s"] - 0.1) < 1e-9
     assert stats["steps"] >= 10 and stats["steps_per_s"] > 0 and stats["real_time_factor"] > 0

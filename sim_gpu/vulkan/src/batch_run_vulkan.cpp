@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "hapfluid/config/scene.hpp"
+#include "hapfluid/config/build_id.hpp"
 #include "hapfluid/sim/outputs.hpp"
 #include "hapfluid/sim_vulkan/backend.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
@@ -31,7 +32,8 @@ std::string stats_json(const VulkanSolver& solver, const BatchOptions& o, const 
   std::ostringstream j;
   j << "{\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
   if (!complete) j << "  \"error\": \"" << json_escape(error) << "\",\n";
-  j << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
+  j << "  \"build_id\": \"" << json_escape(config::build_id()) << "\",\n"
+    << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
     << "  \"backend\": \"vulkan\",\n"
     << "  \"device\": {\"name\": \"" << json_escape(solver.device().name) << "\", \"type\": \"" << solver.device().type
     << "\", \"driver\": \"" << json_escape(solver.device().driver) << "\"},\n"

@@ -1,0 +1,43 @@
+// The command-line convention of every hapfluid executable, on CLI11:
+//  - `--help` prints the usage to stdout and exits 0; `--version` prints "<tool> <build id>";
+//  - a usage error exits 2 with one line on stderr naming the option and what was wrong.
+#pragma once
+
+#include <cstdio>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "hapfluid/config/build_id.hpp"
+
+namespace hapfluid::config {
+
+inline constexpr int kUsageExitCode = 2;
+
+// Adds --version to a tool's App; call before parse_command_line.
+inline void add_version_flag(CLI::App& app) {
+  app.set_version_flag("--version", app.get_name() + " " + build_id(), "print the build id and exit");
+}
+
+// Parses argv into `app`. Returns -1 when the tool should go on, else the exit code to return
+// from main (--help and --version printed, or a usage error reported).
+inline int parse_command_line(CLI::App& app, int argc, const char* const* argv) {
+  try {
+    app.parse(argc, argv);
+    return -1;
+  } catch (const CLI::CallForHelp&) {
+    std::fputs(app.help().c_str(), stdout);
+    return 0;
+  } catch (const CLI::CallForAllHelp&) {
+    std::fputs(app.help("", CLI::AppFormatMode::All).c_str(), stdout);
+    return 0;
+  } catch (const CLI::CallForVersion& version) {
+    std::printf("%s\n", version.what());
+    return 0;
+  } catch (const CLI::ParseError& error) {
+    std::fprintf(stderr, "%s: %s (%s --help for usage)\n", app.get_name().c_str(), error.what(), app.get_name().c_str());
+    return kUsageExitCode;
+  }
+}
+
+}  // namespace hapfluid::config
