@@ -1,6 +1,6 @@
 // haptic-rt: the 1 kHz coupling process (rt_core/README.md).
 //   haptic-rt --rig FILE [--duration S] [--simulated-devices] [--trace FILE]
-//             [--flight-dir DIR] [--shm-prefix NAME]
+//             [--flight-dir DIR] [--shm-prefix NAME]   (--help, --version)
 // Signals: SIGINT/SIGTERM stop cleanly; SIGUSR1 latches the e-stop; SIGUSR2 resets it.
 // Exit codes: 0 ok, 2 bad arguments/config/shm or a device that can never open as configured (one
 // that is not there yet is waited for at a link fault), 3 refused by rt.policy = enforce.
@@ -10,9 +10,9 @@
 
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <string>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/device_seam.hpp"
@@ -34,62 +34,31 @@ void on_signal(int signal) {
   else g_loop->stop();
 }
 
-void usage() {
-  std::fprintf(stderr,
-               "usage: haptic-rt --rig FILE [--duration S] [--simulated-devices] [--trace FILE]\n"
-               "                 [--flight-dir DIR] [--shm-prefix NAME]\n"
-               "  --simulated-devices  use in-process simulated handles instead of the rig's transports\n"
-               "  --trace FILE         drain the trace ring to FILE (CSV) from a non-RT thread\n"
-               "  --flight-dir DIR     where fault post-mortems go (default $TMPDIR/hapfluid-flight)\n");
-}
-
 struct Args {
   std::string rig, trace, flight_dir, prefix;
   double duration_s = 0;
   bool simulated = false;
 };
 
-bool parse(int argc, char** argv, Args& a) {
-  for (int i = 1; i < argc; ++i) {
-    std::string arg = argv[i];
-    auto value = [&](const char* name) -> const char* {
-      if (i + 1 >= argc) {
-        std::fprintf(stderr, "haptic-rt: %s needs a value\n", name);
-        return nullptr;
-      }
-      return argv[++i];
-    };
-    const char* v = nullptr;
-    if (arg == "--rig" && (v = value("--rig"))) a.rig = v;
-    else if (arg == "--trace" && (v = value("--trace"))) a.trace = v;
-    else if (arg == "--flight-dir" && (v = value("--flight-dir"))) a.flight_dir = v;
-    else if (arg == "--shm-prefix" && (v = value("--shm-prefix"))) a.prefix = v;
-    else if (arg == "--duration" && (v = value("--duration"))) {
-      char* end = nullptr;
-      a.duration_s = std::strtod(v, &end);
-      if (*end || a.duration_s < 0) {
-        std::fprintf(stderr, "haptic-rt: --duration %s: must be seconds >= 0\n", v);
-        return false;
-      }
-    } else if (arg == "--simulated-devices") a.simulated = true;
-    else if (arg == "--help" || arg == "-h") return usage(), false;
-    else {
-      if (!v) std::fprintf(stderr, "haptic-rt: unknown or incomplete argument \"%s\"\n", arg.c_str());
-      return usage(), false;
-    }
-  }
-  if (a.rig.empty()) {
-    std::fprintf(stderr, "haptic-rt: --rig FILE is required\n");
-    return usage(), false;
-  }
-  return true;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   Args args;
-  if (!parse(argc, argv, args)) return 2;
+  CLI::App app{"The 1 kHz coupling process: devices, the safety layer and the sim's wrench (rt_core/README.md).",
+               "haptic-rt"};
+  config::add_version_flag(app);
+  app.add_option("--rig", args.rig, "the rig file (TOML)")->required();
+  app.add_option("--duration", args.duration_s, "stop after this many seconds (0: until SIGINT/SIGTERM)")
+      ->check(config::non_negative_number("seconds"))
+      ->capture_default_str();
+  app.add_flag("--simulated-devices", args.simulated, "use in-process simulated handles instead of the rig's transports");
+  app.add_option("--trace", args.trace, "drain the trace ring to this CSV file from a non-real-time thread");
+  app.add_option("--flight-dir", args.flight_dir, "where fault post-mortems go (default $TMPDIR/hapfluid-flight)");
+  app.add_option("--shm-prefix", args.prefix, "the shared-memory prefix (default: the rig's rt.shm.prefix)");
+  app.footer("Signals: SIGINT/SIGTERM stop cleanly; SIGUSR1 latches the e-stop; SIGUSR2 resets it.\n"
+             "Exit codes: 0 ok, 2 bad arguments/config/shm or a device that can never open as configured, "
+             "3 refused by rt.policy = enforce.");
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
   config::Rig rig;
   try {
     rig = config::load_rig(args.rig);

@@ -1,16 +1,16 @@
 // haptic-trace: drains haptic-rt's trace ring (/<prefix>.trace) to a CSV file (trace_csv.hpp)
 // as a separate non-RT process. Stops when haptic-rt closes the ring or dies, on SIGINT/SIGTERM,
 // or after --duration. Records it was too slow to read are counted, never waited for.
-//   haptic-trace --out FILE [--shm-prefix NAME] [--duration S] [--wait S]
+//   haptic-trace --out FILE [--shm-prefix NAME] [--duration S] [--wait S]   (--help, --version)
 #include <signal.h>
 
 #include <atomic>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 #include <thread>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/rt/trace_csv.hpp"
 #include "hapfluid/shm/channel.hpp"
 
@@ -24,25 +24,17 @@ void on_signal(int) { g_stop.store(true); }
 int main(int argc, char** argv) {
   std::string out_path, prefix = "hapfluid";
   double duration_s = 0, wait_s = 10;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "haptic-trace: %s needs a value\nusage: haptic-trace --out FILE [--shm-prefix NAME] [--duration S] [--wait S]\n", a.c_str());
-      return 2;
-    }
-    if (a == "--out") out_path = argv[++i];
-    else if (a == "--shm-prefix") prefix = argv[++i];
-    else if (a == "--duration") duration_s = std::atof(argv[++i]);
-    else if (a == "--wait") wait_s = std::atof(argv[++i]);
-    else {
-      std::fprintf(stderr, "haptic-trace: unknown argument \"%s\"\n", a.c_str());
-      return 2;
-    }
-  }
-  if (out_path.empty()) {
-    std::fprintf(stderr, "haptic-trace: --out FILE is required\n");
-    return 2;
-  }
+  CLI::App app{"Drains haptic-rt's trace ring to a CSV file, as a separate non-real-time process.", "haptic-trace"};
+  config::add_version_flag(app);
+  app.add_option("--out", out_path, "the CSV file to write")->required();
+  app.add_option("--shm-prefix", prefix, "the shared-memory prefix of the haptic-rt to follow")->capture_default_str();
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: when haptic-rt stops)")
+      ->check(config::non_negative_number("seconds"))
+      ->capture_default_str();
+  app.add_option("--wait", wait_s, "seconds to wait for haptic-rt's trace ring to appear")
+      ->check(config::non_negative_number("seconds"))
+      ->capture_default_str();
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigaction(SIGINT, &action, nullptr);

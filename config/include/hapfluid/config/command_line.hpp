@@ -3,6 +3,7 @@
 //  - a usage error exits 2 with one line on stderr naming the option and what was wrong.
 #pragma once
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -13,6 +14,17 @@
 namespace hapfluid::config {
 
 inline constexpr int kUsageExitCode = 2;
+
+// A finite number >= 0 (a duration in seconds, a count), said in those words when it is not.
+inline CLI::Validator non_negative_number(const std::string& unit) {
+  return CLI::Validator(
+      [unit](std::string& text) -> std::string {
+        double value = 0;
+        if (CLI::detail::lexical_cast(text, value) && std::isfinite(value) && value >= 0) return {};
+        return "must be a number of " + unit + " >= 0, not \"" + text + "\"";
+      },
+      unit + " >= 0");
+}
 
 // Adds --version to a tool's App; call before parse_command_line.
 inline void add_version_flag(CLI::App& app) {

@@ -1,0 +1,42 @@
+"""The command-line convention (config/include/hapfluid/config/command_line.hpp) on every tool that
+follows it: --help to stdout with exit 0, --version printing "<tool> <build id>", and a usage
+error as one line on stderr naming the option, with exit 2."""
+import re
+import subprocess
+
+import pytest
+
+# tool -> a usage error and the option its one line must name
+TOOLS = {
+    "haptic-config": (["check", "--kind", "fish", "x.toml"], "--kind"),
+    "haptic-trace": (["--out", "/nonexistent/trace.csv", "--duration", "soon"], "--duration"),
+    "haptic-rt": (["--rig", "config/rigs/fake_single.toml", "--duration", "-1"], "--duration"),
+}
+
+
+def run(binary, tool, *args):
+    return subprocess.run([str(binary(tool)), *args], capture_output=True, text=True, timeout=30)
+
+
+@pytest.mark.parametrize("tool", sorted(TOOLS))
+def test_help_goes_to_stdout_with_exit_0(binary, tool):
+    result = run(binary, tool, "--help")
+    assert result.returncode == 0 and result.stderr == ""
+    assert f"Usage: {tool}" in result.stdout and "--version" in result.stdout
+
+
+@pytest.mark.parametrize("tool", sorted(TOOLS))
+def test_version_is_the_build_id_every_tool_shares(binary, tool):
+    result = run(binary, tool, "--version")
+    assert result.returncode == 0
+    assert re.fullmatch(rf"{tool} \d+\.\d+\.\d+\+git\.\S+\n", result.stdout), result.stdout
+    assert result.stdout.split()[1] == run(binary, "haptic-config", "--version").stdout.split()[1]
+
+
+@pytest.mark.parametrize("tool", sorted(TOOLS))
+def test_a_usage_error_is_one_line_naming_the_option_with_exit_2(binary, tool):
+    args, option = TOOLS[tool]
+    result = run(binary, tool, *args)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"{tool}: ") and option in lines[0], result.stderr
