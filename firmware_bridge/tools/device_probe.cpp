@@ -3,6 +3,7 @@
 // host -> device -> host (command sent until a state echoes its sequence), sequence gaps, bad
 // frames, transport errors, faults, and how long the device took to trip its watchdog after the
 // host fell silent. For end-to-end tests, hardware-in-the-loop runs and latency benchmarks.
+// `haptic-device-probe --help` lists the options.
 #include <time.h>
 
 #include <algorithm>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/haptic_arm.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -21,19 +23,6 @@
 using namespace hapfluid;
 
 namespace {
-
-const char* kUsage = R"(usage: haptic-device-probe [options]
-  --rig FILE --device NAME | --transport loopback|socketcan|hid|usb_bulk --address A
-  [--framing can|canfd|hid|bulk] [--node N] [--kind haptic_arm|spacemouse]
-  --duration S            run time (default 2)
-  --force FX,FY,FZ        force to command, N (default 0,0,0)
-  --torque TX,TY,TZ       torque to command, N.m (default 0,0,0)
-  --enable                set the enable flag (motors on)
-  --silent-after S        stop sending commands after S seconds (watchdog test), keep reading
-  --clear-faults-at S     send disabled commands with clear_faults from S on
-  --estop-at S            request an emergency stop at S
-  --out FILE.json         write the report there too (always printed on stdout)
-)";
 
 struct Options {
   config::RigDevice device;
@@ -44,42 +33,66 @@ struct Options {
   std::string out;
 };
 
-void triple(const std::string& text, double v[3], const std::string& what) {
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf", &v[0], &v[1], &v[2]) != 3)
-    throw std::invalid_argument(what + " " + text + ": expected three comma-separated numbers");
+// "X,Y,Z": three finite numbers and nothing else.
+bool parse_triple(const std::string& text, double v[3]) {
+  const char* p = text.c_str();
+  for (int k = 0; k < 3; ++k) {
+    char* end = nullptr;
+    v[k] = std::strtod(p, &end);
+    if (end == p || !std::isfinite(v[k])) return false;
+    p = end;
+    if (k < 2 && *p++ != ',') return false;
+  }
+  return *p == '\0';
 }
 
-Options parse(int argc, char** argv) {
-  Options o;
+const CLI::Validator kTriple(
+    [](std::string& text) -> std::string {
+      double v[3];
+      return parse_triple(text, v) ? std::string() : "expected three comma-separated numbers, not \"" + text + "\"";
+    },
+    "X,Y,Z");
+
+// Returns -1 to go on with `o`, else the exit code (help or version printed, a usage error said).
+int parse(int argc, char** argv, Options& o) {
   o.device.name = "probe";
-  std::string rig_file, rig_device;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    if (a == "--help" || a == "-h") { std::fputs(kUsage, stdout); std::exit(0); }
-    if (a == "--enable") { o.enable = true; continue; }
-    if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value (see --help)");
-    std::string v = argv[++i];
-    if (a == "--rig") rig_file = v;
-    else if (a == "--device") rig_device = v;
-    else if (a == "--transport") {
-      if (v == "loopback") o.device.transport.kind = config::TransportKind::loopback;
-      else if (v == "socketcan") o.device.transport.kind = config::TransportKind::socketcan;
-      else if (v == "hid") o.device.transport.kind = config::TransportKind::hid;
-      else if (v == "usb_bulk") o.device.transport.kind = config::TransportKind::usb_bulk;
-      else throw std::invalid_argument("--transport " + v + ": loopback, socketcan, hid or usb_bulk");
-    } else if (a == "--address") o.device.transport.address = v;
-    else if (a == "--framing") { o.device.transport.framing = v; o.device.transport.can_fd = v == "canfd"; }
-    else if (a == "--node") o.device.transport.can_node_id = static_cast<std::uint32_t>(std::atoi(v.c_str()));
-    else if (a == "--kind") o.device.kind = v == "spacemouse" ? config::DeviceKind::spacemouse : config::DeviceKind::haptic_arm;
-    else if (a == "--duration") o.duration_s = std::atof(v.c_str());
-    else if (a == "--force") triple(v, o.force, a);
-    else if (a == "--torque") triple(v, o.torque, a);
-    else if (a == "--silent-after") o.silent_after_s = std::atof(v.c_str());
-    else if (a == "--clear-faults-at") o.clear_faults_at_s = std::atof(v.c_str());
-    else if (a == "--estop-at") o.estop_at_s = std::atof(v.c_str());
-    else if (a == "--out") o.out = v;
-    else throw std::invalid_argument("unknown option " + a + " (see --help)");
-  }
+  std::string rig_file, rig_device, transport = "loopback", kind = "haptic_arm", force = "0,0,0", torque = "0,0,0";
+  int node = static_cast<int>(o.device.transport.can_node_id);
+  CLI::App app{"Drives one device through the 1 kHz loop's own driver and reports what it saw (JSON on stdout).",
+               "haptic-device-probe"};
+  config::add_version_flag(app);
+  CLI::Option* rig_opt = app.add_option("--rig", rig_file, "a rig file: probe its device --device");
+  app.add_option("--device", rig_device, "the rig device to probe")->needs(rig_opt);
+  rig_opt->needs("--device");
+  app.add_option("--transport", transport, "the transport, without a rig")
+      ->check(CLI::IsMember({"loopback", "socketcan", "hid", "usb_bulk"}))
+      ->capture_default_str();
+  app.add_option("--address", o.device.transport.address, "socket path, CAN interface, vid:pid or /dev/hidraw path");
+  app.add_option("--framing", o.device.transport.framing, "which wire bytes a loopback transport carries")
+      ->check(CLI::IsMember({"can", "canfd", "hid", "bulk"}))
+      ->capture_default_str();
+  app.add_option("--node", node, "CAN node id")->check(CLI::Range(1, 15))->capture_default_str();
+  app.add_option("--kind", kind, "device kind")->check(CLI::IsMember({"haptic_arm", "spacemouse"}))->capture_default_str();
+  app.add_option("--duration", o.duration_s, "run time, s")->check(config::non_negative_number("seconds"))->capture_default_str();
+  app.add_option("--force", force, "force to command, N")->check(kTriple)->capture_default_str();
+  app.add_option("--torque", torque, "torque to command, N.m")->check(kTriple)->capture_default_str();
+  app.add_flag("--enable", o.enable, "set the enable flag (motors on)");
+  app.add_option("--silent-after", o.silent_after_s, "stop sending commands after S seconds (watchdog test), keep reading")
+      ->check(config::non_negative_number("seconds"));
+  app.add_option("--clear-faults-at", o.clear_faults_at_s, "send disabled commands with clear_faults from S on")
+      ->check(config::non_negative_number("seconds"));
+  app.add_option("--estop-at", o.estop_at_s, "request an emergency stop at S")->check(config::non_negative_number("seconds"));
+  app.add_option("--out", o.out, "write the report there too (always printed on stdout)");
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
+  o.device.transport.kind = transport == "socketcan" ? config::TransportKind::socketcan
+                            : transport == "hid"      ? config::TransportKind::hid
+                            : transport == "usb_bulk" ? config::TransportKind::usb_bulk
+                                                      : config::TransportKind::loopback;
+  o.device.transport.can_fd = o.device.transport.framing == "canfd";
+  o.device.transport.can_node_id = static_cast<std::uint32_t>(node);
+  o.device.kind = kind == "spacemouse" ? config::DeviceKind::spacemouse : config::DeviceKind::haptic_arm;
+  parse_triple(force, o.force);
+  parse_triple(torque, o.torque);
   if (!rig_file.empty()) {
     config::Rig rig = config::load_rig(rig_file);
     const config::RigDevice* d = rig.find_device(rig_device);
@@ -87,8 +100,11 @@ Options parse(int argc, char** argv) {
     o.device = *d;
     o.from_rig = true;
   }
-  if (o.device.transport.address.empty()) throw std::invalid_argument("--address (or --rig/--device) is required");
-  return o;
+  if (o.device.transport.address.empty()) {
+    std::fprintf(stderr, "haptic-device-probe: --address (or --rig with --device) is required (haptic-device-probe --help for usage)\n");
+    return config::kUsageExitCode;
+  }
+  return -1;
 }
 
 double percentile(std::vector<double> v, double p) {
@@ -211,7 +227,9 @@ int run(const Options& o) {
 
 int main(int argc, char** argv) {
   try {
-    return run(parse(argc, argv));
+    Options o;
+    if (const int code = parse(argc, argv, o); code >= 0) return code;
+    return run(o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "haptic-device-probe: %s\n", e.what());
     return 2;

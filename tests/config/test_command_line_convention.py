@@ -11,6 +11,7 @@ TOOLS = {
     "haptic-config": (["check", "--kind", "fish", "x.toml"], "--kind"),
     "haptic-trace": (["--out", "/nonexistent/trace.csv", "--duration", "soon"], "--duration"),
     "haptic-rt": (["--rig", "config/rigs/fake_single.toml", "--duration", "-1"], "--duration"),
+    "haptic-device-probe": (["--address", "/tmp/nobody.sock", "--force", "1,2"], "--force"),
 }
 
 
