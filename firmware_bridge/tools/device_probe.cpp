@@ -33,26 +33,6 @@ struct Options {
   std::string out;
 };
 
-// "X,Y,Z": three finite numbers and nothing else.
-bool parse_triple(const std::string& text, double v[3]) {
-  const char* p = text.c_str();
-  for (int k = 0; k < 3; ++k) {
-    char* end = nullptr;
-    v[k] = std::strtod(p, &end);
-    if (end == p || !std::isfinite(v[k])) return false;
-    p = end;
-    if (k < 2 && *p++ != ',') return false;
-  }
-  return *p == '\0';
-}
-
-const CLI::Validator kTriple(
-    [](std::string& text) -> std::string {
-      double v[3];
-      return parse_triple(text, v) ? std::string() : "expected three comma-separated numbers, not \"" + text + "\"";
-    },
-    "X,Y,Z");
-
 // Returns -1 to go on with `o`, else the exit code (help or version printed, a usage error said).
 int parse(int argc, char** argv, Options& o) {
   o.device.name = "probe";
@@ -74,8 +54,8 @@ int parse(int argc, char** argv, Options& o) {
   app.add_option("--node", node, "CAN node id")->check(CLI::Range(1, 15))->capture_default_str();
   app.add_option("--kind", kind, "device kind")->check(CLI::IsMember({"haptic_arm", "spacemouse"}))->capture_default_str();
   app.add_option("--duration", o.duration_s, "run time, s")->check(config::non_negative_number("seconds"))->capture_default_str();
-  app.add_option("--force", force, "force to command, N")->check(kTriple)->capture_default_str();
-  app.add_option("--torque", torque, "torque to command, N.m")->check(kTriple)->capture_default_str();
+  app.add_option("--force", force, "force to command, N")->check(config::three_numbers())->capture_default_str();
+  app.add_option("--torque", torque, "torque to command, N.m")->check(config::three_numbers())->capture_default_str();
   app.add_flag("--enable", o.enable, "set the enable flag (motors on)");
   app.add_option("--silent-after", o.silent_after_s, "stop sending commands after S seconds (watchdog test), keep reading")
       ->check(config::non_negative_number("seconds"));
@@ -91,8 +71,8 @@ int parse(int argc, char** argv, Options& o) {
   o.device.transport.can_fd = o.device.transport.framing == "canfd";
   o.device.transport.can_node_id = static_cast<std::uint32_t>(node);
   o.device.kind = kind == "spacemouse" ? config::DeviceKind::spacemouse : config::DeviceKind::haptic_arm;
-  parse_triple(force, o.force);
-  parse_triple(torque, o.torque);
+  config::parse_three_numbers(force, o.force);
+  config::parse_three_numbers(torque, o.torque);
   if (!rig_file.empty()) {
     config::Rig rig = config::load_rig(rig_file);
     const config::RigDevice* d = rig.find_device(rig_device);

@@ -20,7 +20,9 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/shm/channel.hpp"
 
 using namespace hapfluid;
@@ -31,9 +33,6 @@ std::atomic<bool> g_switch{false};
 void on_signal(int) { g_stop.store(true); }
 void on_switch_signal(int) { g_switch.store(true); }
 
-bool parse_vec3(const char* text, double out[3]) {
-  return std::sscanf(text, "%lf,%lf,%lf", &out[0], &out[1], &out[2]) == 3;
-}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -41,43 +40,29 @@ int main(int argc, char** argv) {
   double rate_hz = 100, duration_s = 0, stall_after_s = -1, stiffness = 0, damping = 0;
   double force[3] = {0, 0, 2}, torque[3] = {0, 0, 0};
   int devices = 1;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    if (i + 1 >= argc) {
-      std::fprintf(stderr, "haptic-sim-standin: %s needs a value\n", a.c_str());
-      return 2;
-    }
-    const char* v = argv[++i];
-    bool ok = true;
-    if (a == "--shm-prefix") prefix = v;
-    else if (a == "--rate") ok = (rate_hz = std::atof(v)) > 0;
-    else if (a == "--duration") duration_s = std::atof(v);
-    else if (a == "--devices") ok = (devices = std::atoi(v)) >= 1 && devices <= shm::kMaxDevices;
-    else if (a == "--pattern") pattern = v;
-    else if (a == "--force") ok = parse_vec3(v, force);
-    else if (a == "--torque") ok = parse_vec3(v, torque);
-    else if (a == "--stiffness") stiffness = std::atof(v);
-    else if (a == "--damping") damping = std::atof(v);
-    else if (a == "--stall-after") stall_after_s = std::atof(v);
-    else if (a == "--on-signal") signal_pattern = v;
-    else {
-      std::fprintf(stderr, "haptic-sim-standin: unknown argument \"%s\"\n", a.c_str());
-      return 2;
-    }
-    if (!ok) {
-      std::fprintf(stderr, "haptic-sim-standin: %s %s: invalid value\n", a.c_str(), v);
-      return 2;
-    }
-  }
-  auto unknown = [](const char* option, const std::string& name) {
-    static const std::string patterns[] = {"constant", "sine", "step", "nan", "huge", "random"};
-    for (const auto& p : patterns)
-      if (p == name) return false;
-    std::fprintf(stderr, "haptic-sim-standin: %s %s: must be constant, sine, step, nan, huge or random\n", option,
-                 name.c_str());
-    return true;
-  };
-  if (unknown("--pattern", pattern) || (!signal_pattern.empty() && unknown("--on-signal", signal_pattern))) return 2;
+  const std::vector<std::string> patterns{"constant", "sine", "step", "nan", "huge", "random"};
+  std::string force_text = "0,0,2", torque_text = "0,0,0";
+  CLI::App app{"A stand-in sim writer for tests and fault injection: publishes sim samples of a chosen pattern.",
+               "haptic-sim-standin"};
+  config::add_version_flag(app);
+  app.add_option("--shm-prefix", prefix, "the shared-memory prefix")->capture_default_str();
+  app.add_option("--rate", rate_hz, "samples per second")->check(config::positive_number("samples per second"))->capture_default_str();
+  app.add_option("--duration", duration_s, "stop after this many seconds (0: on SIGINT/SIGTERM)")
+      ->check(config::non_negative_number("seconds"))
+      ->capture_default_str();
+  app.add_option("--devices", devices, "devices per sample")->check(CLI::Range(1, static_cast<int>(shm::kMaxDevices)))
+      ->capture_default_str();
+  app.add_option("--pattern", pattern, "the wrench pattern")->check(CLI::IsMember(patterns))->capture_default_str();
+  app.add_option("--force", force_text, "F0, N")->check(config::three_numbers())->capture_default_str();
+  app.add_option("--torque", torque_text, "tau0, N.m")->check(config::three_numbers())->capture_default_str();
+  app.add_option("--stiffness", stiffness, "K of the local model, N/m")->capture_default_str();
+  app.add_option("--damping", damping, "D of the local model, N.s/m")->capture_default_str();
+  app.add_option("--stall-after", stall_after_s, "stop publishing (stay alive) after S seconds")
+      ->check(config::non_negative_number("seconds"));
+  app.add_option("--on-signal", signal_pattern, "SIGUSR1 switches to this pattern")->check(CLI::IsMember(patterns));
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
+  config::parse_three_numbers(force_text, force);
+  config::parse_three_numbers(torque_text, torque);
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigaction(SIGINT, &action, nullptr);

@@ -12,6 +12,7 @@ TOOLS = {
     "haptic-trace": (["--out", "/nonexistent/trace.csv", "--duration", "soon"], "--duration"),
     "haptic-rt": (["--rig", "config/rigs/fake_single.toml", "--duration", "-1"], "--duration"),
     "haptic-device-probe": (["--address", "/tmp/nobody.sock", "--force", "1,2"], "--force"),
+    "haptic-sim-standin": (["--shm-prefix", "nobody", "--pattern", "evil"], "--pattern"),
 }
 
 

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -24,6 +25,39 @@ inline CLI::Validator non_negative_number(const std::string& unit) {
         return "must be a number of " + unit + " >= 0, not \"" + text + "\"";
       },
       unit + " >= 0");
+}
+
+// A finite number > 0 (a rate, a scale), said in those words when it is not.
+inline CLI::Validator positive_number(const std::string& unit) {
+  return CLI::Validator(
+      [unit](std::string& text) -> std::string {
+        double value = 0;
+        if (CLI::detail::lexical_cast(text, value) && std::isfinite(value) && value > 0) return {};
+        return "must be a number of " + unit + " > 0, not \"" + text + "\"";
+      },
+      unit + " > 0");
+}
+
+// "X,Y,Z": three finite numbers and nothing else (a force, a torque, a position).
+inline bool parse_three_numbers(const std::string& text, double v[3]) {
+  const char* p = text.c_str();
+  for (int k = 0; k < 3; ++k) {
+    char* end = nullptr;
+    v[k] = std::strtod(p, &end);
+    if (end == p || !std::isfinite(v[k])) return false;
+    p = end;
+    if (k < 2 && *p++ != ',') return false;
+  }
+  return *p == '\0';
+}
+
+inline CLI::Validator three_numbers() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        double v[3];
+        return parse_three_numbers(text, v) ? std::string() : "expected three comma-separated numbers, not \"" + text + "\"";
+      },
+      "X,Y,Z");
 }
 
 // Adds --version to a tool's App; call before parse_command_line.
