@@ -5,13 +5,13 @@
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <fstream>
 #include <iterator>
 #include <memory>
 #include <stdexcept>
 #include <string>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/render/apps.hpp"
@@ -28,34 +28,6 @@ namespace {
 std::atomic<bool> g_stop{false};
 void on_stop_signal(int) { g_stop.store(true); }
 
-const char* usage = R"(usage: haptic-render [mode] [source] [options]
-modes:
-  (default)              a GLFW window: drag = orbit, wheel = zoom, Esc = quit
-  --headless --out DIR   PNG frames DIR/frame_NNNNNN.png (and DIR/frames.mp4 when ffmpeg exists)
-sources:
-  --replay RUN_DIR       a recorded run of `haptic-sim --out RUN_DIR` (VTK frames + bodies.csv)
-  --scene FILE           the run's scene file (default: RUN_DIR/scene.toml)
-  --kind-field NAME      point array with the particle kind (default "kind"; 0 = fluid)
-  --look NAME            override the scene's fluid look: water, batter, honey or syrup
-  --synthetic ball|pool  a fixed particle set (no simulator): a ball of fluid, or a pool
-  --particles N          synthetic pool: number of particles (default 32768)
-  --live --scene FILE    the running haptic-sim's particles channel (shared memory), drawn as it
-                         comes; waits for the simulator and follows its restarts
-  --shm-prefix NAME      live: the rig's rt.shm.prefix (default "hapfluid")
-  --max-force N          live: force shown as a full bar, newtons (default 10)
-options:
-  --frames N             stop after N frames          --duration S   stop after S seconds
-  --width W --height H   output size (default 1024x768; fluid buffers are half of it)
-  --filter-iterations N  bilateral filter passes (default 4, §5.1)
-  --spheres              plain particle spheres instead of the fluid (debugging)
-  --dump-buffers         also write depth, smoothed depth, thickness and normals images
-  --camera-distance M --camera-yaw DEG --camera-pitch DEG
-  --no-mp4               never run ffmpeg
-  --screenshot FILE      windowed, with --frames: save the last presented image (overlay included)
-  --timings              print the GPU time of every pass of every frame
-  --validation           enable VK_LAYER_KHRONOS_validation; exit 3 if it reports anything
-)";
-
 struct Args {
   bool headless = false, spheres = false, dump = false, mp4 = true, timings = false, validation = false;
   std::string out, replay, scene, kind_field = "kind", synthetic, screenshot, look, shm_prefix = "hapfluid";
@@ -67,64 +39,62 @@ struct Args {
   CameraOverrides camera;
 };
 
+// A command line that cannot run: one line naming what is wrong, exit 2.
 [[noreturn]] void bad(const std::string& message) {
-  std::fprintf(stderr, "haptic-render: %s\n(see haptic-render --help)\n", message.c_str());
-  std::exit(2);
+  std::fprintf(stderr, "haptic-render: %s (haptic-render --help for usage)\n", message.c_str());
+  std::exit(config::kUsageExitCode);
 }
 
-double number(const char* option, const char* text, double lo, double hi) {
-  char* end = nullptr;
-  double v = std::strtod(text, &end);
-  if (end == text || *end || !(v >= lo && v <= hi))
-    bad(std::string(option) + " " + text + ": must be a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  return v;
-}
-
-Args parse(int argc, char** argv) {
-  Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string o = argv[i];
-    auto value = [&]() -> const char* {
-      if (i + 1 >= argc) bad(o + " needs a value");
-      return argv[++i];
-    };
-    if (o == "--help" || o == "-h") { std::fputs(usage, stdout); std::exit(0); }
-    else if (o == "--headless") a.headless = true;
-    else if (o == "--out") a.out = value();
-    else if (o == "--replay") a.replay = value();
-    else if (o == "--scene") a.scene = value();
-    else if (o == "--kind-field") a.kind_field = value();
-    else if (o == "--look") a.look = value();
-    else if (o == "--synthetic") a.synthetic = value();
-    else if (o == "--live") a.live = true;
-    else if (o == "--shm-prefix") a.shm_prefix = value();
-    else if (o == "--max-force") a.max_force_n = number("--max-force", value(), 1e-3, 1e4);
-    else if (o == "--particles") a.particles = long(number("--particles", value(), 1, 4e6));
-    else if (o == "--frames") a.frames = long(number("--frames", value(), 1, 1e9));
-    else if (o == "--duration") a.duration = number("--duration", value(), 0, 1e7);
-    else if (o == "--width") a.settings.width = uint32_t(number("--width", value(), 16, 8192));
-    else if (o == "--height") a.settings.height = uint32_t(number("--height", value(), 16, 8192));
-    else if (o == "--filter-iterations") a.settings.filter_iterations = int(number("--filter-iterations", value(), 0, 64));
-    else if (o == "--spheres") a.spheres = true;
-    else if (o == "--dump-buffers") a.dump = true;
-    else if (o == "--camera-distance") a.camera.distance_m = float(number("--camera-distance", value(), 0.05, 1000));
-    else if (o == "--camera-yaw") a.camera.yaw_deg = float(number("--camera-yaw", value(), -360, 360));
-    else if (o == "--camera-pitch") a.camera.pitch_deg = float(number("--camera-pitch", value(), -89, 89));
-    else if (o == "--no-mp4") a.mp4 = false;
-    else if (o == "--screenshot") a.screenshot = value();
-    else if (o == "--timings") a.timings = true;
-    else if (o == "--validation") a.validation = true;
-    else bad("unknown option " + o);
-  }
+// Returns -1 to go on with `a`, else the exit code (help or version printed, a usage error said).
+int parse(int argc, char** argv, Args& a) {
+  CLI::App app{"Draws the fluid (paper section 5) in its own process. Modes: a GLFW window (default; drag = orbit, "
+               "wheel = zoom, Esc = quit) or --headless PNG frames. Sources: --replay, --synthetic or --live.",
+               "haptic-render"};
+  config::add_version_flag(app);
+  app.add_flag("--headless", a.headless, "PNG frames DIR/frame_NNNNNN.png (and DIR/frames.mp4 when ffmpeg exists)");
+  app.add_option("--out", a.out, "headless: the frame folder");
+  app.add_option("--replay", a.replay, "a recorded run of `haptic-sim --out RUN_DIR` (VTK frames + bodies.csv)");
+  app.add_option("--scene", a.scene, "the run's scene file (default: RUN_DIR/scene.toml)");
+  app.add_option("--kind-field", a.kind_field, "point array with the particle kind (0 = fluid)")->capture_default_str();
+  app.add_option("--look", a.look, "override the scene's fluid look")->check(CLI::IsMember({"water", "batter", "honey", "syrup"}));
+  app.add_option("--synthetic", a.synthetic, "a fixed particle set (no simulator): a ball of fluid, or a pool")
+      ->check(CLI::IsMember({"ball", "pool"}));
+  app.add_option("--particles", a.particles, "synthetic pool: number of particles")->check(config::number_in(1, 4e6))
+      ->capture_default_str();
+  app.add_flag("--live", a.live, "the running haptic-sim's particles channel (shared memory), with --scene FILE; "
+                                 "waits for the simulator and follows its restarts");
+  app.add_option("--shm-prefix", a.shm_prefix, "live: the rig's rt.shm.prefix")->capture_default_str();
+  app.add_option("--max-force", a.max_force_n, "live: force shown as a full bar, N")->check(config::number_in(1e-3, 1e4))
+      ->capture_default_str();
+  app.add_option("--frames", a.frames, "stop after N frames")->check(config::number_in(1, 1e9));
+  app.add_option("--duration", a.duration, "stop after S seconds")->check(config::number_in(0, 1e7));
+  app.add_option("--width", a.settings.width, "output width (fluid buffers are half of it)")->check(config::number_in(16, 8192))
+      ->capture_default_str();
+  app.add_option("--height", a.settings.height, "output height")->check(config::number_in(16, 8192))->capture_default_str();
+  app.add_option("--filter-iterations", a.settings.filter_iterations, "bilateral filter passes (section 5.1)")
+      ->check(config::number_in(0, 64))
+      ->capture_default_str();
+  app.add_flag("--spheres", a.spheres, "plain particle spheres instead of the fluid (debugging)");
+  app.add_flag("--dump-buffers", a.dump, "also write depth, smoothed depth, thickness and normals images");
+  float distance = 0, yaw = 0, pitch = 0;
+  CLI::Option* distance_opt = app.add_option("--camera-distance", distance, "m")->check(config::number_in(0.05, 1000));
+  CLI::Option* yaw_opt = app.add_option("--camera-yaw", yaw, "degrees")->check(config::number_in(-360, 360));
+  CLI::Option* pitch_opt = app.add_option("--camera-pitch", pitch, "degrees")->check(config::number_in(-89, 89));
+  bool no_mp4 = false;
+  app.add_flag("--no-mp4", no_mp4, "never run ffmpeg");
+  app.add_option("--screenshot", a.screenshot, "windowed, with --frames: save the last presented image (overlay included)");
+  app.add_flag("--timings", a.timings, "print the GPU time of every pass of every frame");
+  app.add_flag("--validation", a.validation, "enable VK_LAYER_KHRONOS_validation; exit 3 if it reports anything");
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
+  a.mp4 = !no_mp4;
+  if (distance_opt->count()) a.camera.distance_m = distance;
+  if (yaw_opt->count()) a.camera.yaw_deg = yaw;
+  if (pitch_opt->count()) a.camera.pitch_deg = pitch;
   a.settings.debug_spheres = a.spheres;
   if (a.headless && a.out.empty()) bad("--headless needs --out DIR");
   if (!a.screenshot.empty() && (a.headless || a.frames < 0)) bad("--screenshot needs the windowed mode and --frames N");
   if (!a.replay.empty() && !a.synthetic.empty()) bad("give either --replay or --synthetic, not both");
-  if (!a.look.empty() && a.look != "water" && a.look != "batter" && a.look != "honey" && a.look != "syrup")
-    bad("--look " + a.look + ": must be water, batter, honey or syrup");
-  if (!a.synthetic.empty() && a.synthetic != "ball" && a.synthetic != "pool")
-    bad("--synthetic " + a.synthetic + ": must be \"ball\" or \"pool\"");
-  return a;
+  return -1;
 }
 
 config::FluidLook look_named(const std::string& name) {
@@ -187,7 +157,8 @@ std::unique_ptr<FrameSource> make_source(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  const Args a = parse(argc, argv);
+  Args a;
+  if (const int code = parse(argc, argv, a); code >= 0) return code;
   // SIGINT/SIGTERM (Ctrl-C, the launcher, systemd) end the run like --duration: the PNG being
   // written is finished, not left as a .partial, and the summary and MP4 still come out.
   struct sigaction action {};

@@ -27,6 +27,20 @@ inline CLI::Validator non_negative_number(const std::string& unit) {
       unit + " >= 0");
 }
 
+// A number in [lo, hi] (a size, an angle, a count), said with its bounds when it is not.
+inline CLI::Validator number_in(double lo, double hi) {
+  char bounds[64];
+  std::snprintf(bounds, sizeof bounds, "[%g, %g]", lo, hi);
+  const std::string range = bounds;
+  return CLI::Validator(
+      [lo, hi, range](std::string& text) -> std::string {
+        double value = 0;
+        if (CLI::detail::lexical_cast(text, value) && value >= lo && value <= hi) return {};
+        return "must be a number in " + range + ", not \"" + text + "\"";
+      },
+      "in " + range);
+}
+
 // A finite number > 0 (a rate, a scale), said in those words when it is not.
 inline CLI::Validator positive_number(const std::string& unit) {
   return CLI::Validator(
