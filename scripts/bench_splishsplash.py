@@ -26,7 +26,6 @@ and over the last second, each code's samples go to <case>/<code>/speeds.csv and
     bench_splishsplash.py --build build --out out/bench/bench_splishsplash.json [--case dam_break]
 """
 import argparse
-import csv
 import json
 import math
 import os
@@ -168,17 +167,10 @@ def hapfluid_at_rest(build: pathlib.Path, scene: pathlib.Path, duration_s: float
         fluid = frame["kind"] == 0
         speed = np.linalg.norm(frame["velocity"][fluid], axis=1)
         rows.append((t, math.sqrt(float(np.mean(speed ** 2))), float(speed.max()), float(frame["density"][fluid].mean())))
-    write_speeds(out / "speeds.csv", rows)
+    splishsplash.write_speeds(out / "speeds.csv", rows)
     iterations = json.loads((out / "stats.json").read_text()).get("solver_iterations", {})
     return rows, {"mean_pressure_iterations": iterations.get("density_per_step"),
                   "mean_divergence_iterations": iterations.get("divergence_per_step")}
-
-
-def write_speeds(path: pathlib.Path, rows: list):
-    with path.open("w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["t_s", "rms_speed_m_s", "max_speed_m_s", "mean_density_kg_m3"])
-        writer.writerows(rows)
 
 
 def at_rest_metrics(rows: list, duration_s: float, rest_density: float) -> dict:

@@ -253,6 +253,18 @@ def run(scene_path: pathlib.Path, stop_at_s: float, out_dir: pathlib.Path, threa
 
 
 AT_REST_DRIVER = pathlib.Path(__file__).resolve().parent / "splishsplash_at_rest.py"
+SPEED_COLUMNS = ("t_s", "rms_speed_m_s", "max_speed_m_s", "mean_density_kg_m3")
+
+
+def write_speeds(path: pathlib.Path, rows: list):
+    """A tank-at-rest sample file, either code's: SPEED_COLUMNS, one row per sample, written whole."""
+    path = pathlib.Path(path)
+    part = path.with_suffix(".part")
+    with part.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(SPEED_COLUMNS)
+        writer.writerows(rows)
+    part.rename(path)
 
 
 def run_at_rest(scene_path: pathlib.Path, settle_s: float, duration_s: float, out_dir: pathlib.Path, threads: int,
@@ -274,8 +286,7 @@ def run_at_rest(scene_path: pathlib.Path, settle_s: float, duration_s: float, ou
                            f"{(result.stderr or result.stdout)[-2000:]}")
     with speeds.open() as f:
         rows = list(csv.DictReader(f))
-    samples = [(float(r["t_s"]), float(r["rms_speed_m_s"]), float(r["max_speed_m_s"]), float(r["mean_density_kg_m3"]))
-               for r in rows]
+    samples = [tuple(float(r[c]) for c in SPEED_COLUMNS) for r in rows]
     iterations = {}
     for key in ("mean_pressure_iterations", "mean_divergence_iterations"):
         found = re.findall(_SUMMARY[key], result.stdout, flags=re.MULTILINE)

@@ -12,13 +12,14 @@ and every 0.1 s of that the rms and largest fluid speed and the mean density go 
 (columns t_s, rms_speed_m_s, max_speed_m_s, mean_density_kg_m3; t = 0 at the end of settling).
 """
 import argparse
-import csv
 import math
 import pathlib
 import sys
 
 import numpy as np
 import pysplishsplash as sph
+
+import splishsplash  # beside this file
 
 SAMPLE_EVERY_S = 0.1
 
@@ -66,12 +67,7 @@ def main():
     base.cleanup()
     if not rows:
         sys.exit("splishsplash_at_rest: the run ended before settling did: no samples")
-    part = args.out.with_suffix(".part")
-    with part.open("w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(["t_s", "rms_speed_m_s", "max_speed_m_s", "mean_density_kg_m3"])
-        writer.writerows(rows)
-    part.rename(args.out)
+    splishsplash.write_speeds(args.out, rows)
     return 0
 
 

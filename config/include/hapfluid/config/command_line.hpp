@@ -16,40 +16,38 @@ namespace hapfluid::config {
 
 inline constexpr int kUsageExitCode = 2;
 
+namespace detail {
+// A number that `accept` takes; otherwise "must be a number <requirement>, not "<text>"".
+template <class Accept>
+CLI::Validator number_validator(Accept accept, const std::string& requirement, const std::string& description) {
+  return CLI::Validator(
+      [accept, requirement](std::string& text) -> std::string {
+        double value = 0;
+        if (CLI::detail::lexical_cast(text, value) && accept(value)) return {};
+        return "must be a number " + requirement + ", not \"" + text + "\"";
+      },
+      description);
+}
+}  // namespace detail
+
 // A finite number >= 0 (a duration in seconds, a count), said in those words when it is not.
 inline CLI::Validator non_negative_number(const std::string& unit) {
-  return CLI::Validator(
-      [unit](std::string& text) -> std::string {
-        double value = 0;
-        if (CLI::detail::lexical_cast(text, value) && std::isfinite(value) && value >= 0) return {};
-        return "must be a number of " + unit + " >= 0, not \"" + text + "\"";
-      },
-      unit + " >= 0");
+  return detail::number_validator([](double v) { return std::isfinite(v) && v >= 0; }, "of " + unit + " >= 0",
+                                  unit + " >= 0");
+}
+
+// A finite number > 0 (a rate, a scale), said in those words when it is not.
+inline CLI::Validator positive_number(const std::string& unit) {
+  return detail::number_validator([](double v) { return std::isfinite(v) && v > 0; }, "of " + unit + " > 0",
+                                  unit + " > 0");
 }
 
 // A number in [lo, hi] (a size, an angle, a count), said with its bounds when it is not.
 inline CLI::Validator number_in(double lo, double hi) {
   char bounds[64];
   std::snprintf(bounds, sizeof bounds, "[%g, %g]", lo, hi);
-  const std::string range = bounds;
-  return CLI::Validator(
-      [lo, hi, range](std::string& text) -> std::string {
-        double value = 0;
-        if (CLI::detail::lexical_cast(text, value) && value >= lo && value <= hi) return {};
-        return "must be a number in " + range + ", not \"" + text + "\"";
-      },
-      "in " + range);
-}
-
-// A finite number > 0 (a rate, a scale), said in those words when it is not.
-inline CLI::Validator positive_number(const std::string& unit) {
-  return CLI::Validator(
-      [unit](std::string& text) -> std::string {
-        double value = 0;
-        if (CLI::detail::lexical_cast(text, value) && std::isfinite(value) && value > 0) return {};
-        return "must be a number of " + unit + " > 0, not \"" + text + "\"";
-      },
-      unit + " > 0");
+  return detail::number_validator([lo, hi](double v) { return v >= lo && v <= hi; }, std::string("in ") + bounds,
+                                  std::string("in ") + bounds);
 }
 
 // "X,Y,Z": three finite numbers and nothing else (a force, a torque, a position).
