@@ -16,7 +16,7 @@ HIL = pathlib.Path(__file__).resolve().parent / "hil.py"
 def test_every_guest_test_passes_on_a_real_kernel(build_dir):
     flavour = os.environ.get("HAPFLUID_HIL_KERNEL", "default")
     r = subprocess.run([sys.executable, str(HIL), "--build", str(build_dir), "--kernel", flavour],
-                       capture_output=True, text=True, timeout=900)
+                       capture_output=True, text=True)  # hil.py kills a hung guest itself
     print(r.stderr)
     verdict = [line for line in r.stderr.splitlines() if "PASSED" in line or "FAILED" in line]
     assert r.returncode == 0, "HIL suite failed:\n" + "\n".join(r.stderr.splitlines()[-60:])
