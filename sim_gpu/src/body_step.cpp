@@ -16,11 +16,9 @@ void sort_body_view(const GridGeometry& grid, const BodyParticles& bp, CellSort&
   v.cell_start = sort.cell_start;
 }
 
-void step_bodies(SimulationModel& m, std::vector<std::vector<VirtualCoupling*>>& couplings_of_body,
-                 const std::vector<DeviceState>& devices, double dt, ThreadPool& pool) {
-  BodyParticles& bp = m.body_particles;
-  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
-    RigidBody& body = m.bodies[b];
+void sum_body_forces(SimulationModel& m) {
+  const BodyParticles& bp = m.body_particles;
+  for (RigidBody& body : m.bodies) {
     if (!body.dynamic) continue;
     Vec3 ff, ft, cf, ct;
     for (std::uint32_t i = body.first_particle; i < body.first_particle + body.particle_count; ++i) {
@@ -32,8 +30,15 @@ void step_bodies(SimulationModel& m, std::vector<std::vector<VirtualCoupling*>>&
       ct += cross(arm, contact);
     }
     body.fluid_force = ff, body.fluid_torque = ft, body.contact_force = cf, body.contact_torque = ct;
-    integrate_body(body, couplings_of_body[b], devices, m.params.gravity_m_s2, dt);
   }
+}
+
+void step_bodies(SimulationModel& m, std::vector<std::vector<VirtualCoupling*>>& couplings_of_body,
+                 const std::vector<DeviceState>& devices, double dt, ThreadPool& pool) {
+  BodyParticles& bp = m.body_particles;
+  sum_body_forces(m);
+  for (std::size_t b = 0; b < m.bodies.size(); ++b)
+    if (m.bodies[b].dynamic) integrate_body(m.bodies[b], couplings_of_body[b], devices, m.params.gravity_m_s2, dt);
   if (bp.size() == 0) return;
   pool.parallel_for(bp.size(), [&](std::size_t begin, std::size_t end, int) {
     for (std::size_t i = begin; i < end; ++i) {

@@ -74,7 +74,7 @@ void PairLists::reserve(std::size_t n) {
 }
 
 void DfsphFields::resize(std::size_t n) {
-  for (auto* v : {&density_hat, &factor, &solid_gx, &solid_gy, &solid_gz, &solid_flux, &stiffness_step,
+  for (auto* v : {&density_hat, &factor, &solid_gx, &solid_gy, &solid_gz, &stiffness_step,
                   &density_stiffness, &divergence_stiffness, &visc_bx, &visc_by, &visc_bz, &visc_inv_diag_x,
                   &visc_inv_diag_y, &visc_inv_diag_z, &cg_rx, &cg_ry, &cg_rz, &cg_px, &cg_py, &cg_pz, &cg_ax, &cg_ay,
                   &cg_az})
@@ -113,11 +113,6 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
     const std::uint32_t ob = o + nf + ns;
     const Sums sb = pair_kernels<true>(bv.x.data(), bv.y.data(), bv.z.data(), bv.volume.data(), 0, list + ob, nb, xi, yi, zi,
                                        k, gx + ob, gy + ob, gz + ob, w + ob);
-    float flux = 0;
-    for (std::uint32_t q = 0; q < nb; ++q) {
-      const std::uint32_t j = list[ob + q];
-      flux += gx[ob + q] * bv.vx[j] + gy[ob + q] * bv.vy[j] + gz[ob + q] * bv.vz[j];
-    }
     float wall_share = 0, wx = 0, wy = 0, wz = 0;
     walls.sample(xi, yi, zi, wall_share, wx, wy, wz);
     out.density_hat[i] = sf.w + ss.w + sb.w + wall_share;
@@ -129,15 +124,15 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
     const float denominator = tx * tx + ty * ty + tz * tz + sf.g2;
     out.factor[i] = denominator > tiny ? 1.0f / denominator : 0.0f;
     out.solid_gx[i] = sx, out.solid_gy[i] = sy, out.solid_gz[i] = sz;
-    out.solid_flux[i] = flux;
     out.neighbours[i] = clamp16(nf + ns + nb);
   }
 }
 
 HAPFLUID_CLONES
-void density_rate(const FluidParticles& f, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                  std::size_t begin, std::size_t end, float* rate) {
+void density_rate(const FluidParticles& f, const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists,
+                  const PairRange* ranges, std::size_t begin, std::size_t end, float* rate) {
   const float *vx = f.vx.data(), *vy = f.vy.data(), *vz = f.vz.data();
+  const float *bx = bodies.vx.data(), *by = bodies.vy.data(), *bz = bodies.vz.data();
   const std::uint32_t* list = lists.index.data();
   const float *gx = lists.gx.data(), *gy = lists.gy.data(), *gz = lists.gz.data();
   for (std::size_t i = begin; i < end; ++i) {
@@ -150,7 +145,13 @@ void density_rate(const FluidParticles& f, const DfsphFields& d, const PairLists
       const std::uint32_t j = list[q];
       s += gx[q] * (vxi - vx[j]) + gy[q] * (vyi - vy[j]) + gz[q] * (vzi - vz[j]);
     }
-    rate[i] = s + vxi * d.solid_gx[i] + vyi * d.solid_gy[i] + vzi * d.solid_gz[i] - d.solid_flux[i];
+    // The body particles' flux, from their velocities now: a solve coupled to the bodies moves them.
+    float flux = 0;
+    for (std::uint32_t q = o + n + r.statics; q < o + n + r.statics + r.bodies; ++q) {
+      const std::uint32_t j = list[q];
+      flux += gx[q] * bx[j] + gy[q] * by[j] + gz[q] * bz[j];
+    }
+    rate[i] = s + vxi * d.solid_gx[i] + vyi * d.solid_gy[i] + vzi * d.solid_gz[i] - flux;
   }
 }
 

@@ -19,9 +19,10 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
                  const SortedSolids& statics, const SortedSolids& bodies, const WallMap& walls, std::size_t begin,
                  std::size_t end, PairLists& lists, PairRange* ranges, DfsphFields& out);
 
-// rate[i] = D(rho/rho0)/Dt = sum_j V_j grad W_ij . (v_i - v_j) over fluid and solid neighbours, 1/s.
-void density_rate(const FluidParticles& f, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                  std::size_t begin, std::size_t end, float* rate);
+// rate[i] = D(rho/rho0)/Dt = sum_j V_j grad W_ij . (v_i - v_j) over fluid and solid neighbours,
+// 1/s; the dynamic bodies' particles with their velocities in `bodies` (static solids are at rest).
+void density_rate(const FluidParticles& f, const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists,
+                  const PairRange* ranges, std::size_t begin, std::size_t end, float* rate);
 
 // v_i -= dt (sum_fluid (k_i + k_j) V_j grad W_ij + k_i sum_solids Psi_b grad W_ib), k = the
 // stiffness increments of this iteration.

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "body_contacts.hpp"
+#include "body_solve_coupling.hpp"
 #include "body_step.hpp"
 #include "dfsph_passes.hpp"
 #include "implicit_viscosity.hpp"
@@ -33,7 +34,10 @@ constexpr double kViscosityTolerance = 1e-3;
 
 }  // namespace
 
-DfsphSolver::DfsphSolver(SimulationModel model, int threads) : m_(std::move(model)), pool_(threads) {
+DfsphSolver::~DfsphSolver() = default;
+
+DfsphSolver::DfsphSolver(SimulationModel model, int threads)
+    : m_(std::move(model)), pool_(threads), coupling_(std::make_unique<detail::BodySolveCoupling>()) {
   if (m_.params.solver != config::PressureSolver::dfsph)
     throw std::invalid_argument("DfsphSolver: the model was built for solver = \"wcsph\"");
   devices_.resize(m_.devices.size());
@@ -57,6 +61,7 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads) : m_(std::move(mode
   worker_clamped_.assign(threads, 0);
   worker_touching_.assign(threads, 0);
   detail::set_body_particle_velocities(m_);
+  coupling_->init(m_, threads);
   const SimulationParams& p = m_.params;
   bool low[3], high[3];
   for (int a = 0; a < 3; ++a) low[a] = p.clamp_lo[a] < p.box_lo[a], high[a] = p.clamp_hi[a] > p.box_hi[a];
@@ -166,21 +171,26 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
   float* step = fields_.stiffness_step.data();
   // Warm start: where the particle is compressed now, start from part of last step's stiffness.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-    detail::density_rate(f, fields_, lists_[w], ranges_.data(), b, e, step);
+    detail::density_rate(f, body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
     for (std::size_t i = b; i < e; ++i) {
       const float k = rate(i, step[i]) > 0 ? kWarmStartFraction * warm[i] * warm_scale : 0.0f;
       step[i] = k;
       total[i] = k;
     }
   });
-  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-    detail::apply_stiffness(f, fields_, lists_[w], ranges_.data(), b, e, dt);
-  });
+  auto apply = [&] {
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+      detail::apply_stiffness(f, fields_, lists_[w], ranges_.data(), b, e, dt);
+      if (coupled_) coupling_->add_forces(w, body_view_, lists_[w], ranges_.data(), b, e, step);
+    });
+    if (coupled_) coupling_->update_velocities(m_, body_view_, pool_);
+  };
+  apply();
   int it = 0;
   double mean_error = 0;
   for (; it < ip.max_iterations; ++it) {
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-      detail::density_rate(f, fields_, lists_[w], ranges_.data(), b, e, step);
+      detail::density_rate(f, body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
       double sum = 0;
       for (std::size_t i = b; i < e; ++i) {
         const float error = rate(i, step[i]);
@@ -195,9 +205,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
     for (double s : worker_error_) sum += s;
     mean_error = sum / static_cast<double>(n);
     if (it >= ip.min_iterations && mean_error <= tolerance) break;
-    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-      detail::apply_stiffness(f, fields_, lists_[w], ranges_.data(), b, e, dt);
-    });
+    apply();
   }
   // The last error pass's increments were not applied: take them back out of the total.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
@@ -345,22 +353,42 @@ int DfsphSolver::viscosity_solve(float dt) {
   return it;
 }
 
+void DfsphSolver::body_contacts() {
+  BodyParticles& bp = m_.body_particles;
+  if (bp.size() == 0) return;
+  std::fill(worker_touching_.begin(), worker_touching_.end(), 0);
+  pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
+    detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, bp, b, e);
+  });
+  pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int w) {
+    worker_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, b, e) ? 1 : 0;
+  });
+  bodies_touching_ = std::any_of(worker_touching_.begin(), worker_touching_.end(), [](char c) { return c != 0; });
+}
+
+void DfsphSolver::start_density_coupling(double dt) {
+  detail::sum_body_forces(m_);
+  for (std::size_t b = 0; b < m_.bodies.size(); ++b) {
+    RigidBody& body = m_.bodies[b];
+    if (!body.dynamic || body.particle_count == 0) continue;
+    const detail::BodySolveCoupling::Vec6 f = coupling_->solve_force(b);
+    body.fluid_force += Vec3{f[0], f[1], f[2]};
+    body.fluid_torque += Vec3{f[3], f[4], f[5]};
+    const BodySystem sys = body_system(body, couplings_of_body_[b], devices_, m_.params.gravity_m_s2, dt);
+    detail::BodySolveCoupling::Vec6 u;
+    solve6(sys.a, sys.rhs, u.data());
+    coupling_->start_solve(b, u);
+  }
+  coupling_->update_velocities(m_, body_view_, pool_);
+}
+
 void DfsphSolver::body_forces_and_step(double dt) {
   BodyParticles& bp = m_.body_particles;
-  if (bp.size() > 0) {
+  if (bp.size() > 0)
     pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int) {
       detail::body_fluid_forces(m_.params, m_.fluid, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::pressure,
                                 bp, b, e);
     });
-    std::fill(worker_touching_.begin(), worker_touching_.end(), 0);
-    pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
-      detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, bp, b, e);
-    });
-    pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int w) {
-      worker_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, b, e) ? 1 : 0;
-    });
-    bodies_touching_ = std::any_of(worker_touching_.begin(), worker_touching_.end(), [](char c) { return c != 0; });
-  }
   detail::step_bodies(m_, couplings_of_body_, devices_, dt, pool_);
 }
 
@@ -396,6 +424,14 @@ void DfsphSolver::step(double dt) {
   sort_and_build_pairs();
   times_.neighbour_search_s += seconds_since(t0);
 
+  coupled_ = !settling_ && coupling_->active();
+  t0 = Clock::now();
+  if (coupled_) {
+    coupling_->begin_step(m_, couplings_of_body_, devices_, dt, body_view_, lists_, ranges_.data(), fields_, pool_);
+    coupling_->start_solve_from_body_states(m_);
+  }
+  times_.bodies_s += seconds_since(t0);
+
   t0 = Clock::now();
   divergence_solve(dtf);
   times_.pressure_s += seconds_since(t0);
@@ -403,6 +439,11 @@ void DfsphSolver::step(double dt) {
   t0 = Clock::now();
   non_pressure_forces(dtf);
   times_.forces_s += seconds_since(t0);
+
+  t0 = Clock::now();
+  if (!settling_) body_contacts();
+  if (coupled_) start_density_coupling(dt);
+  times_.bodies_s += seconds_since(t0);
 
   t0 = Clock::now();
   density_solve(dtf);

@@ -629,6 +629,63 @@ cfl = 0.2
   std::filesystem::remove_all(dir);
 }
 
+TEST(Coupling, LightPaddleHeldStillInDfsphWaterGivesTheHandASteadyForce) {
+  // A thin paddle of 700 kg/m^3 held still, half in still water, on the incompressible solver at
+  // its long steps. It weighs far less than the water its motion would push aside, so a coupling
+  // that hands it the fluid's pressure only after the solves makes it tremble (the added-mass
+  // instability), and the hand feels the trembling. Coupled inside the solves, the force on the
+  // hand stays steady: its fluctuation stays under 10 % of the paddle's weight, about the Weber
+  // fraction of force discrimination at the hand (7-10 %), so a person holding it feels no tremor.
+  const auto dir = test::temp_dir("held_paddle");
+  const auto scene = test::write_scene(dir, "name = \"held\"\n" + domain(0, 0, 0, 0.16, 0.16, 0.2) + R"(
+[fluid]
+solver = "dfsph"
+settle_s = 0.2
+particle_spacing_m = 0.01
+viscosity_pa_s = 0.001
+[[fluid.blocks]]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.16, 0.16, 0.08]
+[time]
+cfl = 0.4
+max_dt_s = 0.005
+[[bodies]]
+name = "paddle"
+mesh = "paddle.obj"
+position_m = [0.04, 0.075, 0.04]  # the box is [0, 0.08] x [0, 0.01] x [0, 0.06] in its frame
+density_kg_m3 = 700.0
+viscosity_pa_s = 0.001
+[[devices]]
+name = "hand"
+start_position_m = [0.08, 0.08, 0.15]
+[[couplings]]
+device = "hand"
+body = "paddle"
+grasp_position_m = [0.04, 0.005, 0.11]
+linear_stiffness_n_per_m = 300.0
+linear_damping_n_s_per_m = 3.0
+angular_stiffness_nm_per_rad = 1.0
+angular_damping_nm_s_per_rad = 0.01
+)", {{"paddle.obj", test::box_mesh(0.08, 0.01, 0.06)}});
+  const auto solver_ptr = make_cpu_solver(build_model(scene), 2);
+  Solver& solver = *solver_ptr;
+  solver.advance(0.3);  // the paddle finds its rest on the coupling spring
+  std::vector<Vec3> forces;
+  solver.advance(0.5, [&](double) { forces.push_back(solver.model().couplings[0].device_force); });
+  Vec3 mean;
+  for (const Vec3& f : forces) mean += f * (1.0 / forces.size());
+  double variance = 0;
+  for (const Vec3& f : forces) variance += dot(f - mean, f - mean) / forces.size();
+  const RigidBody& paddle = solver.model().bodies[0];
+  const double weight = paddle.mass_kg * kG;
+  std::cout << "held paddle (dfsph): " << forces.size() << " steps, hand force " << norm(mean) << " N (weight " << weight
+            << " N), rms fluctuation " << std::sqrt(variance) << " N, clamps " << solver.clamped_particle_count() << "\n";
+  EXPECT_GT(forces.size(), 50u);
+  EXPECT_LT(std::sqrt(variance), 0.1 * weight);
+  EXPECT_EQ(solver.clamped_particle_count(), 0u);
+  std::filesystem::remove_all(dir);
+}
+
 namespace {
 
 // A pool 8 layers deep with a device's probe (Algorithm 1) 3.5 cm under its surface; `motion`

@@ -36,6 +36,21 @@ struct VirtualCoupling {
   Vec3 device_force, device_torque;
 };
 
+// The body's implicit step as a 6x6 system A u = rhs for u = (v, w) at t + dt/2 (Algorithm 2,
+// lines 6-7): A is the mass matrix plus each coupling's dt (b + dt k) J^T J; rhs is the
+// momentum plus dt times the external force and torque summed into the body, gravity and the
+// couplings' spring and damper terms at the current pose. Linear in the external force: a change
+// dF of it changes u by dt A^-1 dF, which is what a pressure solve coupled to the body needs.
+struct BodySystem {
+  double a[6][6] = {};
+  double rhs[6] = {};
+};
+BodySystem body_system(const RigidBody& body, const std::vector<VirtualCoupling*>& couplings,
+                       const std::vector<DeviceState>& devices, const Vec3& gravity, double dt);
+
+// x = A^-1 b for the 6x6 systems here (SPD; Gaussian elimination with partial pivoting).
+void solve6(const double a[6][6], const double b[6], double x[6]);
+
 // One leap-frog step of a dynamic body (Algorithm 2, lines 6-8): external force and torque
 // (fluid + contact, already summed into the body), gravity and the couplings holding it.
 // Updates the state and the couplings' device wrenches.

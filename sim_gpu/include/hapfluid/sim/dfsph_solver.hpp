@@ -13,7 +13,9 @@
 //     implicitly (implicit_viscosity.hpp), so that no viscosity limits the step;
 //  4. constant-density solve on the predicted velocities (rho* = rho0), warm-started likewise;
 //  5. bodies: the pressure and viscous forces the fluid received from each body particle, with
-//     the opposite sign (two-way coupling, Akinci et al. 2012), plus contacts; Algorithm 2;
+//     the opposite sign (two-way coupling, Akinci et al. 2012), plus contacts; Algorithm 2.
+//     Both solves move the bodies as they iterate (body_solve_coupling.hpp), so that a body
+//     lighter than the water around it stays stable;
 //  6. positions x += dt v; a particle that still reaches a wall is clamped and counted (a fault).
 // The domain walls enter through a volume map (wall_map.hpp); static and dynamic bodies as
 // boundary particles with their Akinci volumes Psi_b: rho_i += Psi_b W_ib, and the fluid's
@@ -24,6 +26,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "hapfluid/sim/model.hpp"
@@ -56,7 +59,6 @@ struct DfsphFields {
   std::vector<float> density_hat;        // rho / rho0
   std::vector<float> factor;             // DFSPH factor, m^2
   std::vector<float> solid_gx, solid_gy, solid_gz;  // sum over solids of Psi_b grad W_ib, 1/m
-  std::vector<float> solid_flux;         // sum over body particles of Psi_b grad W_ib . v_b, 1/s
   std::vector<float> stiffness_step;     // this iteration's stiffness increment, m^2/s^2
   std::vector<float> density_stiffness, divergence_stiffness;  // this step's totals, m^2/s^2
   // Implicit viscosity (implicit_viscosity.hpp): right-hand side, inverse diagonal, and the
@@ -67,11 +69,14 @@ struct DfsphFields {
   void resize(std::size_t n);
 };
 
+class BodySolveCoupling;
+
 }  // namespace detail
 
 class DfsphSolver final : public Solver {
  public:
   DfsphSolver(SimulationModel model, int threads);
+  ~DfsphSolver() override;
 
   const SimulationModel& model() const override { return m_; }
   double time_s() const override { return time_s_; }
@@ -101,6 +106,11 @@ class DfsphSolver final : public Solver {
   // The viscosity solve on the velocities after gravity and XSPH; returns CG iterations.
   int viscosity_solve(float dt);
   void density_solve(float dt);
+  // Contacts between solids, from the positions at the start of the step.
+  void body_contacts();
+  // The bodies' velocities before the density solve: their step with the viscous, contact and
+  // divergence-solve forces so far (the density solve adds its own as it goes).
+  void start_density_coupling(double dt);
   void body_forces_and_step(double dt);
   void integrate_positions(float dt);
   // One solve: iterations until the mean error is below `tolerance`; returns iterations.
@@ -120,6 +130,8 @@ class DfsphSolver final : public Solver {
   std::vector<detail::PairLists> lists_;  // one per worker
   std::vector<detail::PairRange> ranges_;
   detail::DfsphFields fields_;
+  std::unique_ptr<detail::BodySolveCoupling> coupling_;
+  bool coupled_ = false;  // this step's solves move the bodies (not while settling)
   std::vector<double> worker_error_;
   std::vector<double> worker_dots_;  // 2 per worker
   std::vector<std::uint64_t> worker_clamped_;

@@ -1,0 +1,178 @@
+#include "body_solve_coupling.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hapfluid::sim::detail {
+namespace {
+
+using Vec6 = BodySolveCoupling::Vec6;
+using Mat6 = BodySolveCoupling::Mat6;
+
+Mat6 inverse6(const double a[6][6]) {
+  Mat6 inv{};
+  for (int c = 0; c < 6; ++c) {
+    double e[6] = {}, x[6];
+    e[c] = 1;
+    solve6(a, e, x);
+    for (int r = 0; r < 6; ++r) inv[6 * r + c] = x[r];
+  }
+  return inv;
+}
+
+Vec6 times(const Mat6& a, const Vec6& v) {
+  Vec6 out{};
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c) out[r] += a[6 * r + c] * v[c];
+  return out;
+}
+
+}  // namespace
+
+void BodySolveCoupling::init(const SimulationModel& m, int workers) {
+  workers_ = workers;
+  bodies_ = m.bodies.size();
+  particle_mass_ = m.params.fluid_particle_mass_kg;
+  dynamic_.assign(bodies_, 0);
+  for (std::size_t b = 0; b < bodies_; ++b) dynamic_[b] = m.bodies[b].dynamic && m.bodies[b].particle_count > 0;
+  active_ = std::any_of(dynamic_.begin(), dynamic_.end(), [](char c) { return c != 0; });
+  mobility_.assign(bodies_, Mat6{});
+  relax_.assign(bodies_, Mat6{});
+  u_start_.assign(bodies_, Vec6{});
+  u_.assign(bodies_, Vec6{});
+  force_.assign(bodies_, Vec6{});
+  com_.assign(3 * bodies_, 0.0f);
+  worker_force_.assign(6 * bodies_ * workers, 0.0);
+  worker_response_.assign(36 * bodies_ * workers, 0.0);
+  worker_j_.assign(6 * bodies_ * workers, 0.0);
+}
+
+void BodySolveCoupling::begin_step(const SimulationModel& m,
+                                   const std::vector<std::vector<VirtualCoupling*>>& couplings_of_body,
+                                   const std::vector<DeviceState>& devices, double dt, const SortedSolids& bodies,
+                                   const std::vector<PairLists>& lists, const PairRange* ranges,
+                                   const DfsphFields& fields, ThreadPool& pool) {
+  if (!active_) return;
+  for (std::size_t b = 0; b < bodies_; ++b) {
+    const Vec3& c = m.bodies[b].position;
+    com_[3 * b] = static_cast<float>(c.x), com_[3 * b + 1] = static_cast<float>(c.y), com_[3 * b + 2] = static_cast<float>(c.z);
+  }
+  // sum_i factor_i J_i J_i^T per body; J_i from particle i's pairs with that body's particles.
+  std::fill(worker_response_.begin(), worker_response_.end(), 0.0);
+  pool.parallel_for(m.fluid.size(), [&](std::size_t begin, std::size_t end, int w) {
+    const PairLists& l = lists[w];
+    double* j6 = worker_j_.data() + 6 * bodies_ * w;
+    double* s36 = worker_response_.data() + 36 * bodies_ * w;
+    for (std::size_t i = begin; i < end; ++i) {
+      const PairRange& r = ranges[i];
+      if (r.bodies == 0) continue;
+      const std::uint32_t first = r.offset + r.fluid + r.statics, last = first + r.bodies;
+      for (std::uint32_t q = first; q < last; ++q) {
+        const std::uint32_t p = l.index[q];
+        const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
+        const double gx = l.gx[q], gy = l.gy[q], gz = l.gz[q];
+        const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
+        double* j = j6 + 6 * b;
+        j[0] += gx, j[1] += gy, j[2] += gz;
+        j[3] += ry * gz - rz * gy, j[4] += rz * gx - rx * gz, j[5] += rx * gy - ry * gx;
+      }
+      const double factor = fields.factor[i];
+      for (std::uint32_t q = first; q < last; ++q) {
+        const std::size_t b = static_cast<std::size_t>(bodies.body[l.index[q]]);
+        double* j = j6 + 6 * b;
+        if (j[0] == 0 && j[1] == 0 && j[2] == 0 && j[3] == 0 && j[4] == 0 && j[5] == 0) continue;  // done
+        double* s = s36 + 36 * b;
+        for (int a = 0; a < 6; ++a)
+          for (int c = 0; c < 6; ++c) s[6 * a + c] += factor * j[a] * j[c];
+        std::fill(j, j + 6, 0.0);
+      }
+    }
+  });
+  for (std::size_t b = 0; b < bodies_; ++b) {
+    if (!dynamic_[b]) continue;
+    const BodySystem sys = body_system(m.bodies[b], couplings_of_body[b], devices, m.params.gravity_m_s2, dt);
+    const Mat6 a_inv = inverse6(sys.a);
+    Mat6 s{};
+    for (int w = 0; w < workers_; ++w)
+      for (int k = 0; k < 36; ++k) s[k] += worker_response_[36 * (bodies_ * w + b) + k];
+    double i_plus_l[6][6];
+    for (int r = 0; r < 6; ++r)
+      for (int c = 0; c < 6; ++c) {
+        double l = 0;
+        for (int k = 0; k < 6; ++k) l += a_inv[6 * r + k] * s[6 * k + c];
+        i_plus_l[r][c] = (r == c ? 1.0 : 0.0) + particle_mass_ * l;
+      }
+    relax_[b] = inverse6(i_plus_l);
+    for (int k = 0; k < 36; ++k) mobility_[b][k] = dt * a_inv[k];
+  }
+}
+
+void BodySolveCoupling::start_solve(std::size_t body, const Vec6& u_start) {
+  u_start_[body] = u_start;
+  u_[body] = u_start;
+  force_[body] = Vec6{};
+}
+
+void BodySolveCoupling::start_solve_from_body_states(const SimulationModel& m) {
+  for (std::size_t b = 0; b < bodies_; ++b) {
+    if (!dynamic_[b]) continue;
+    const RigidBody& body = m.bodies[b];
+    const Vec3 &v = body.linear_velocity, &w = body.angular_velocity;
+    start_solve(b, Vec6{v.x, v.y, v.z, w.x, w.y, w.z});
+  }
+  std::fill(worker_force_.begin(), worker_force_.end(), 0.0);
+}
+
+void BodySolveCoupling::add_forces(int worker, const SortedSolids& bodies, const PairLists& lists,
+                                   const PairRange* ranges, std::size_t begin, std::size_t end, const float* k) {
+  double* acc = worker_force_.data() + 6 * bodies_ * worker;
+  for (std::size_t i = begin; i < end; ++i) {
+    const PairRange& r = ranges[i];
+    if (r.bodies == 0 || k[i] == 0) continue;
+    const double mk = static_cast<double>(particle_mass_) * k[i];
+    const std::uint32_t first = r.offset + r.fluid + r.statics, last = first + r.bodies;
+    for (std::uint32_t q = first; q < last; ++q) {
+      const std::uint32_t p = lists.index[q];
+      const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
+      const double fx = mk * lists.gx[q], fy = mk * lists.gy[q], fz = mk * lists.gz[q];
+      const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
+      double* f = acc + 6 * b;
+      f[0] += fx, f[1] += fy, f[2] += fz;
+      f[3] += ry * fz - rz * fy, f[4] += rz * fx - rx * fz, f[5] += rx * fy - ry * fx;
+    }
+  }
+}
+
+void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodies, ThreadPool& pool) {
+  mismatch_ = 0;
+  for (std::size_t b = 0; b < bodies_; ++b) {
+    if (!dynamic_[b]) continue;
+    for (int w = 0; w < workers_; ++w) {
+      double* f = worker_force_.data() + 6 * (bodies_ * w + b);
+      for (int k = 0; k < 6; ++k) force_[b][k] += f[k], f[k] = 0;
+    }
+    const Vec6 pushed = times(mobility_[b], force_[b]);
+    Vec6 gap;
+    for (int k = 0; k < 6; ++k) gap[k] = u_start_[b][k] + pushed[k] - u_[b][k];
+    const Vec6 step = times(relax_[b], gap);
+    for (int k = 0; k < 6; ++k) u_[b][k] += step[k];
+    for (int k = 0; k < 3; ++k) gap[k] -= step[k];
+    mismatch_ = std::max(mismatch_, std::sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]));
+  }
+  BodyParticles& bp = m.body_particles;
+  pool.parallel_for(bodies.size(), [&](std::size_t begin, std::size_t end, int) {
+    for (std::size_t p = begin; p < end; ++p) {
+      const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
+      const Vec6& u = u_[b];
+      const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
+      const float vx = static_cast<float>(u[0] + u[4] * rz - u[5] * ry);
+      const float vy = static_cast<float>(u[1] + u[5] * rx - u[3] * rz);
+      const float vz = static_cast<float>(u[2] + u[3] * ry - u[4] * rx);
+      bodies.vx[p] = vx, bodies.vy[p] = vy, bodies.vz[p] = vz;
+      const std::uint32_t s = bodies.source[p];
+      bp.vx[s] = vx, bp.vy[s] = vy, bp.vz[s] = vz;
+    }
+  });
+}
+
+}  // namespace hapfluid::sim::detail
