@@ -1,11 +1,15 @@
-// haptic-sim: the SPH fluid and rigid-body simulator. Batch mode runs a scene with its scripted
-// device motion and writes VTK frames, body/coupling CSV histories and stats.json.
-//   haptic-sim --scene FILE --backend cpu --duration SECONDS --out DIR [--threads N] [--export-every SECONDS]
+// haptic-sim: the SPH fluid and rigid-body simulator.
+//  - batch: runs a scene with its scripted device motion and writes VTK frames, body/coupling
+//    CSV histories and stats.json (batch_run.hpp);
+//  - --live: the simulator between haptic-rt and haptic-render over shared memory, its clock
+//    the wall clock (sim_gpu/live).
 #include <unistd.h>
 
 #include <iostream>
 #include <string>
+#include <vector>
 
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/sim/batch_run.hpp"
 #include "hapfluid/sim/command_line_numbers.hpp"
@@ -13,95 +17,28 @@
 #ifdef HAPFLUID_WITH_VULKAN
 #include "hapfluid/sim_vulkan/backend.hpp"
 #endif
-#include "live_main.hpp"  // sim_gpu/live: haptic-sim --live
+#include "live_runner.hpp"  // sim_gpu/live
 
 namespace {
 
-void usage(std::ostream& out) {
-  out << "usage: haptic-sim --scene FILE --out DIR [--backend cpu|auto] [--duration SECONDS] [--threads N]\n"
-         "                  [--export-every SECONDS]\n"
-         "  --scene FILE          scene file (TOML)\n"
-         "  --out DIR             output folder: particles/frame_NNNNNN.vtk, bodies.csv, couplings.csv, stats.json\n"
-         "  --backend cpu|auto    simulation backend (cpu: the multithreaded reference; auto: best available)\n"
-         "  --duration SECONDS    simulated time (default: the scene's duration_s)\n"
-         "  --threads N           worker threads (default: all cores)\n"
-         "  --export-every SECONDS  particle frame interval (default 0.05; 0: no particle frames)\n"
-#ifdef HAPFLUID_WITH_VULKAN
-         "  --backend vulkan|auto  Vulkan compute (auto: a GPU, else lavapipe, else cpu with a notice)\n"
-         "  --vk-device auto|gpu|cpu  which Vulkan device (cpu: lavapipe)\n"
-         "  --vk-validation       run with the Khronos validation layer\n"
-#endif
-      ;
-}
+namespace config = hapfluid::config;
+namespace sim = hapfluid::sim;
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  namespace sim = hapfluid::sim;
-  if (sim::wants_live(argc, argv)) return sim::live_main(argc, argv);
-  sim::BatchOptions o;
-#ifdef HAPFLUID_WITH_VULKAN
-  sim::vulkan::VulkanRunOptions vulkan;
-#endif
-  o.threads = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      usage(std::cout);
-      return 0;
-    }
-#ifdef HAPFLUID_WITH_VULKAN
-    if (a == "--vk-validation") {
-      vulkan.validation = true;
-      continue;
-    }
-#endif
-    if (i + 1 >= argc) {
-      std::cerr << "haptic-sim: " << a << " needs a value\n";
-      usage(std::cerr);
-      return 2;
-    }
-    const char* v = argv[++i];
-    if (a == "--scene") o.scene = v;
-    else if (a == "--out") o.out = v;
-    else if (a == "--backend") o.backend = v;
-#ifdef HAPFLUID_WITH_VULKAN
-    else if (a == "--vk-device") {
-      try {
-        vulkan.device = sim::vulkan::parse_device_preference(v);
-      } catch (const std::exception& e) {
-        return std::cerr << "haptic-sim: --vk-device: " << e.what() << "\n", 2;
-      }
-    }
-#endif
-    else if (a == "--duration") {
-      if (!sim::accepted(std::cerr, a, v, sim::parse_seconds(v, 0, true, o.duration_s))) return 2;
-    } else if (a == "--threads") {
-      if (!sim::accepted(std::cerr, a, v, sim::parse_whole_number(v, 1, sim::kMaxWorkerThreads, o.threads))) return 2;
-    } else if (a == "--export-every") {
-      if (!sim::accepted(std::cerr, a, v, sim::parse_seconds(v, 0, false, o.export_every_s))) return 2;
-    } else {
-      std::cerr << "haptic-sim: unknown option " << a << "\n";
-      usage(std::cerr);
-      return 2;
-    }
-  }
-  if (o.scene.empty() || o.out.empty()) {
-    std::cerr << "haptic-sim: --scene and --out are required\n";
-    usage(std::cerr);
-    return 2;
-  }
-  o.progress_line = isatty(STDERR_FILENO);
+int run_batch_mode(const sim::BatchOptions& o, bool vk_validation, const std::string& vk_device) {
   try {
 #ifdef HAPFLUID_WITH_VULKAN
+    sim::vulkan::VulkanRunOptions vulkan;
+    vulkan.validation = vk_validation;
+    vulkan.device = sim::vulkan::parse_device_preference(vk_device);
     const auto r = sim::vulkan::run_batch_on_backend(o, vulkan, std::cerr);
 #else
+    (void)vk_validation, (void)vk_device;
     const auto r = sim::run_batch(o, std::cerr);
 #endif
     std::cerr << "haptic-sim: done: " << r.steps << " steps, " << r.simulated_time_s << " s simulated in " << r.wall_time_s
               << " s; outputs in " << o.out.string() << "\n";
     return 0;
-  } catch (const hapfluid::config::ConfigError& e) {
+  } catch (const config::ConfigError& e) {
     std::cerr << "haptic-sim: invalid scene:\n";
     for (const auto& p : e.problems()) std::cerr << "  " << p.to_string() << "\n";
     return 1;
@@ -109,4 +46,96 @@ int main(int argc, char** argv) {
     std::cerr << "haptic-sim: error: " << e.what() << "\n";
     return 1;
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int cores = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
+  sim::BatchOptions batch;
+  sim::LiveOptions live;
+  batch.threads = live.threads = cores;
+  bool live_mode = false, vk_validation = false;
+  std::string scene, out, backend, vk_device = "auto";
+  double duration_s = 0, export_every_s = -1;
+  int threads = cores;
+
+  CLI::App app{"The SPH fluid and rigid-body simulator. Batch mode runs a scene with its scripted devices and writes "
+               "particles/frame_NNNNNN.vtk (with a .vtk.series), bodies.csv, couplings.csv and stats.json; --live "
+               "runs it between haptic-rt and haptic-render over shared memory.",
+               "haptic-sim"};
+  app.footer(
+      "Live mode: device poses come from /<prefix>.device_states (haptic-rt), sim samples go to "
+      "/<prefix>.sim_samples and particle frames to /<prefix>.particles (haptic-render); rig device N drives the "
+      "scene device with source = \"rig\" and rig_device = \"N\", else the scene device named N "
+      "(sim_gpu/live/README.md).");
+  config::add_version_flag(app);
+  auto* live_flag = app.add_flag("--live", live_mode, "run as the live simulator (simulated time follows the wall clock)");
+  app.add_option("--scene", scene, "scene file (TOML)")->required();
+  app.add_option("--out", out, "output folder (batch: required; live: couplings.csv, bodies.csv, stats.json of the run)");
+  app.add_option("--backend", backend,
+                 "cpu: the multithreaded reference; vulkan; auto: batch, a GPU, else lavapipe, else cpu with a notice; "
+                 "live, Vulkan if a ~1 s probe shows it keeps up with the wall clock, else the faster (default: "
+                 "batch cpu, live auto)")
+      ->check(CLI::IsMember({"cpu", "vulkan", "auto"}));
+  app.add_option("--vk-device", vk_device, "Vulkan device: auto (a GPU, else lavapipe), gpu, cpu (lavapipe)")
+      ->check(CLI::IsMember({"auto", "gpu", "cpu", "lavapipe"}))
+      ->capture_default_str();
+  app.add_option("--duration", duration_s,
+                 "batch: simulated seconds (default: the scene's duration_s); live: wall seconds (default 0: until "
+                 "SIGINT/SIGTERM)")
+      ->check(sim::seconds_from(0, false));
+  app.add_option("--threads", threads, "worker threads of the cpu backend (default: all cores)")
+      ->check(sim::whole_number_in(1, sim::kMaxWorkerThreads));
+  app.add_option("--export-every", export_every_s,
+                 "particle frame interval in simulated seconds (batch default 0.05, live default 0: none; 0: none)")
+      ->check(sim::seconds_from(0, false));
+  app.add_flag("--vk-validation", vk_validation, "batch: run with the Khronos validation layer");
+  const std::string live_group = "Live mode (with --live)";
+  app.add_option("--rig", live.rig, "take the shm prefix and group from the rig's [rt.shm]")->group(live_group)->needs(live_flag);
+  app.add_option("--shm-prefix", live.shm_prefix, "shared-memory prefix (default: the rig's, else \"hapfluid\")")
+      ->group(live_group)
+      ->needs(live_flag);
+  app.add_option("--max-lag", live.max_lag_s, "backlog tolerated before the fluid is declared slower than real time")
+      ->check(sim::seconds_from(0.001, false))
+      ->capture_default_str()
+      ->group(live_group)
+      ->needs(live_flag);
+  app.add_option("--status-every", live.status_every_s, "status line interval on stderr (0: none)")
+      ->check(sim::seconds_from(0, false))
+      ->capture_default_str()
+      ->group(live_group)
+      ->needs(live_flag);
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
+
+  if (live_mode) {
+    if (vk_validation) {
+      std::cerr << "haptic-sim: --vk-validation is a batch-mode option (haptic-sim --help for usage)\n";
+      return config::kUsageExitCode;
+    }
+    live.scene = scene;
+    live.out = out;
+    if (!backend.empty()) live.backend = backend;
+    live.vulkan_device = vk_device;
+    live.duration_s = duration_s;
+    live.threads = threads;
+    if (export_every_s >= 0) live.export_every_s = export_every_s;
+    return sim::run_live(live, std::cerr);
+  }
+  if (out.empty()) {
+    std::cerr << "haptic-sim: --out is required in batch mode (haptic-sim --help for usage)\n";
+    return config::kUsageExitCode;
+  }
+  if (app.count("--duration") > 0 && duration_s == 0) {
+    std::cerr << "haptic-sim: --duration: must be > 0 s in batch mode, not \"0\" (haptic-sim --help for usage)\n";
+    return config::kUsageExitCode;
+  }
+  batch.scene = scene;
+  batch.out = out;
+  if (!backend.empty()) batch.backend = backend;
+  batch.duration_s = duration_s;
+  batch.threads = threads;
+  if (export_every_s >= 0) batch.export_every_s = export_every_s;
+  batch.progress_line = isatty(STDERR_FILENO);
+  return run_batch_mode(batch, vk_validation, vk_device);
 }

@@ -1,16 +1,17 @@
 // Strict parsing of haptic-sim's numeric options (batch and live): the whole argument must be
 // the number, nothing is rounded or truncated. Each parser returns "" on success, else the
-// reason, which the caller prints after the option and its value:
-//   haptic-sim: --threads 2.5: must be a whole number in 1..256
+// reason; the CLI11 validators below put it in the tool's one-line usage error:
+//   haptic-sim: --threads: must be a whole number in 1..256, not "2.5" (haptic-sim --help for usage)
 #pragma once
 
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <ostream>
 #include <string>
 #include <string_view>
 #include <system_error>
+
+#include <CLI/CLI.hpp>
 
 namespace hapfluid::sim {
 
@@ -52,12 +53,25 @@ inline std::string parse_seconds(std::string_view text, double lo, bool lo_exclu
   return "";
 }
 
-// True when reason is empty (the value was accepted); else prints
-// "haptic-sim: <option> <value>: <reason>" to err.
-inline bool accepted(std::ostream& err, std::string_view option, std::string_view value, const std::string& reason) {
-  if (reason.empty()) return true;
-  err << "haptic-sim: " << option << " " << value << ": " << reason << "\n";
-  return false;
+// The same rules as CLI11 validators: "must be a whole number in 1..256, not "2.5"".
+inline CLI::Validator whole_number_in(int lo, int hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& text) -> std::string {
+        int value = 0;
+        const std::string reason = parse_whole_number(text, lo, hi, value);
+        return reason.empty() ? reason : reason + ", not \"" + text + "\"";
+      },
+      "INT in " + std::to_string(lo) + ".." + std::to_string(hi));
+}
+
+inline CLI::Validator seconds_from(double lo, bool lo_excluded) {
+  return CLI::Validator(
+      [lo, lo_excluded](std::string& text) -> std::string {
+        double value = 0;
+        const std::string reason = parse_seconds(text, lo, lo_excluded, value);
+        return reason.empty() ? reason : reason + ", not \"" + text + "\"";
+      },
+      std::string("SECONDS ") + (lo_excluded ? "> " : ">= ") + detail::format_bound(lo));
 }
 
 }  // namespace hapfluid::sim
