@@ -14,11 +14,13 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "fake_firmware.hpp"
 #include "functionfs_transport.hpp"
 #include "hand.hpp"
 #include "hidg_transport.hpp"
+#include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/hid_descriptors.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -33,40 +35,6 @@ volatile sig_atomic_t g_stop = 0;
 volatile sig_atomic_t g_inject = 0;
 void on_signal(int) { g_stop = 1; }
 void on_inject_signal(int) { g_inject = 1; }
-
-const char* kUsage = R"(usage: haptic-fake-device [options]
-  --rig FILE --device NAME     take transport, node, watchdog and limits from a rig file
-  --transport loopback|socketcan|hid|usb_bulk   (default loopback)
-  --address A                  loopback socket path | CAN interface | hid: VID:PID presented through
-                               /dev/uhid (default 1209:4846, SpaceMouse 256f:c635), or the /dev/hidgN
-                               node of a USB gadget's hid function | usb_bulk: the directory where
-                               the gadget's FunctionFS instance is mounted
-  --framing can|canfd|hid|bulk loopback wire format (socketcan: can or canfd)
-  --node N                     CAN node id 1..15 (default 1)
-  --kind haptic_arm|spacemouse (default haptic_arm)
-  --motion NAME                hold|stir|pour|spin|tilt|interactive|scene:FILE:DEVICE (default hold)
-  --duration S                 run time in seconds; 0 = until SIGINT/SIGTERM (default 0)
-  --rate-hz HZ                 state rate (default 1000)
-  --watchdog-ms MS             command watchdog (default 20)
-  --max-force-n N --max-torque-nm T   motor limits (default 12, 0.8)
-  --log FILE.csv               per-tick log: command received, force applied, hand force, pose, and
-                               on CLOCK_MONOTONIC the tick, the STATE it sent, the commands it took
-  --summary FILE.json          statistics at exit (also printed on stdout)
-fault injection:
-  --drop-probability P         drop each outgoing STATE with probability P
-  --corrupt-every N            corrupt the CRC of every Nth outgoing STATE
-  --delay-ms MS                delay every outgoing message by MS
-  --silent-after S             send nothing after S seconds (still receives)
-  --stop-answering-after S     stop reading commands after S seconds (still sends state)
-  --bus-off-at S [--bus-off-ms MS]   CAN: report bus-off at S, silent for MS (default 200), restart
-  --seed N                     random seed for --drop-probability (default 1)
-  --inject-on-signal           the faults above begin at SIGUSR1 instead of at the start (their
-                               times count from it); the tick it began is printed on stderr
-  --out-interval-ms MS         a slow USB device (gadget hid or usb_bulk): take host->device
-                               transfers only every MS, so the host's writes wait for the device
-  --hid-report-descriptor KIND print the HID report descriptor of KIND (haptic_arm|spacemouse) as
-                               hex, for a gadget's configfs report_desc, and exit
-)";
 
 struct Options {
   config::RigDevice device;
@@ -85,75 +53,110 @@ struct Options {
 
 bool is_gadget_hid(const Options& o) { return o.device.transport.address.rfind("/dev/hidg", 0) == 0; }
 
-[[noreturn]] void print_hid_descriptor(const std::string& kind) {
+void print_hid_descriptor(const std::string& kind) {
   const bool mouse = kind == "spacemouse";
-  if (!mouse && kind != "haptic_arm")
-    throw std::invalid_argument("--hid-report-descriptor " + kind + ": choose haptic_arm or spacemouse");
   const std::uint8_t* d = mouse ? device::kSpaceMouseHidDescriptor : device::kHapfluidHidDescriptor;
   const std::size_t n = mouse ? sizeof device::kSpaceMouseHidDescriptor : sizeof device::kHapfluidHidDescriptor;
   for (std::size_t i = 0; i < n; ++i) std::printf("%02x", d[i]);
   std::printf("\n");
-  std::exit(0);
 }
 
-Options parse(int argc, char** argv) {
-  Options o;
+// Parses the command line into `o` (CLI11, the tools' shared convention). Returns -1 when the
+// device should run, else the exit code (--help, --version, --hid-report-descriptor: 0; a usage
+// error: 2). Checks that need the rig file or several options together throw invalid_argument.
+int parse(int argc, char** argv, Options& o) {
   o.device.name = "fake";
   o.device.transport.kind = config::TransportKind::loopback;
-  std::string rig_file, rig_device;
-  bool watchdog_given = false;
-  for (int i = 1; i < argc; ++i) {
-    std::string a = argv[i];
-    if (a == "--help" || a == "-h") { std::fputs(kUsage, stdout); std::exit(0); }
-    if (a == "--inject-on-signal") { o.inject_on_signal = true; continue; }
-    if (i + 1 >= argc) throw std::invalid_argument(a + " needs a value (see --help)");
-    std::string v = argv[++i];
-    auto number = [&](double lo) {
-      char* end = nullptr;
-      double d = std::strtod(v.c_str(), &end);
-      if (end == v.c_str() || *end || !std::isfinite(d) || d < lo)
-        throw std::invalid_argument(a + " " + v + ": expected a number >= " + std::to_string(lo));
-      return d;
-    };
-    if (a == "--rig") rig_file = v;
-    else if (a == "--device") rig_device = v;
-    else if (a == "--transport") {
-      if (v == "loopback") o.device.transport.kind = config::TransportKind::loopback;
-      else if (v == "socketcan") o.device.transport.kind = config::TransportKind::socketcan;
-      else if (v == "hid") o.device.transport.kind = config::TransportKind::hid;
-      else if (v == "usb_bulk") o.device.transport.kind = config::TransportKind::usb_bulk;
-      else throw std::invalid_argument("--transport " + v + ": loopback, socketcan, hid or usb_bulk");
-    } else if (a == "--address") o.device.transport.address = v;
-    else if (a == "--framing") { o.device.transport.framing = v; o.device.transport.can_fd = v == "canfd"; }
-    else if (a == "--node") o.device.transport.can_node_id = static_cast<std::uint32_t>(number(1));
-    else if (a == "--kind") o.kind = v;
-    else if (a == "--motion") o.motion = v;
-    else if (a == "--duration") o.duration_s = number(0);
-    else if (a == "--rate-hz") o.rate_hz = number(1);
-    else if (a == "--watchdog-ms") { o.device.watchdogs.device_watchdog_ms = number(1); watchdog_given = true; }
-    else if (a == "--max-force-n") o.device.limits.max_force_n = number(0);
-    else if (a == "--max-torque-nm") o.device.limits.max_torque_nm = number(0);
-    else if (a == "--log") o.log_path = v;
-    else if (a == "--summary") o.summary_path = v;
-    else if (a == "--drop-probability") o.drop_probability = number(0);
-    else if (a == "--corrupt-every") o.corrupt_every = static_cast<int>(number(0));
-    else if (a == "--delay-ms") o.delay_ms = number(0);
-    else if (a == "--silent-after") o.silent_after_s = number(0);
-    else if (a == "--stop-answering-after") o.stop_answering_after_s = number(0);
-    else if (a == "--bus-off-at") o.bus_off_at_s = number(0);
-    else if (a == "--bus-off-ms") o.bus_off_ms = number(0);
-    else if (a == "--seed") o.seed = static_cast<unsigned>(number(0));
-    else if (a == "--out-interval-ms") o.out_interval_ms = number(0);
-    else if (a == "--hid-report-descriptor") print_hid_descriptor(v);
-    else throw std::invalid_argument("unknown option " + a + " (see --help)");
-  }
+  std::string rig_file, rig_device, transport = "loopback", framing, hid_descriptor;
+  int node = 1;
+  const std::vector<std::string> kinds{"haptic_arm", "spacemouse"};
+  CLI::App app{"A fake haptic device speaking the real wire protocol (loopback socket, SocketCAN, hidraw through "
+               "uhid or a USB gadget, or USB bulk through FunctionFS), with scripted hand motion and fault "
+               "injection.",
+               "haptic-fake-device"};
+  config::add_version_flag(app);
+  app.add_option("--rig", rig_file, "take transport, node, watchdog and limits from a rig file (with --device)");
+  app.add_option("--device", rig_device, "the rig device NAME");
+  app.add_option("--transport", transport, "the link")
+      ->check(CLI::IsMember({"loopback", "socketcan", "hid", "usb_bulk"}))
+      ->capture_default_str();
+  app.add_option("--address", o.device.transport.address,
+                 "loopback socket path | CAN interface | hid: VID:PID presented through /dev/uhid (default "
+                 "1209:4846, SpaceMouse 256f:c635), or the /dev/hidgN node of a USB gadget's hid function | "
+                 "usb_bulk: the directory where the gadget's FunctionFS instance is mounted");
+  app.add_option("--framing", framing, "loopback wire format (socketcan: can or canfd)")
+      ->check(CLI::IsMember({"can", "canfd", "hid", "bulk"}));
+  app.add_option("--node", node, "CAN node id")->check(CLI::Range(1, 15))->capture_default_str();
+  app.add_option("--kind", o.kind, "the device")->check(CLI::IsMember(kinds))->capture_default_str();
+  app.add_option("--motion", o.motion, "hold|stir|pour|spin|tilt|interactive|scene:FILE:DEVICE")->capture_default_str();
+  app.add_option("--duration", o.duration_s, "run time in seconds; 0: until SIGINT/SIGTERM")
+      ->check(config::non_negative_number("seconds"))
+      ->capture_default_str();
+  app.add_option("--rate-hz", o.rate_hz, "state rate")->check(config::number_in(1, 1e6))->capture_default_str();
+  app.add_option("--watchdog-ms", o.device.watchdogs.device_watchdog_ms, "command watchdog (default 20, or the rig's)")
+      ->check(config::number_in(1, 1e6));
+  app.add_option("--max-force-n", o.device.limits.max_force_n, "motor force limit, N")
+      ->check(config::non_negative_number("N"))
+      ->capture_default_str();
+  app.add_option("--max-torque-nm", o.device.limits.max_torque_nm, "motor torque limit, N.m")
+      ->check(config::non_negative_number("N.m"))
+      ->capture_default_str();
+  app.add_option("--log", o.log_path,
+                 "per-tick CSV: command received, force applied, hand force, pose, and on CLOCK_MONOTONIC the "
+                 "tick, the STATE it sent, the commands it took");
+  app.add_option("--summary", o.summary_path, "statistics at exit as JSON (also printed on stdout)");
+  const std::string faults = "Fault injection";
+  app.add_option("--drop-probability", o.drop_probability, "drop each outgoing STATE with this probability")
+      ->check(config::number_in(0, 1))
+      ->group(faults);
+  app.add_option("--corrupt-every", o.corrupt_every, "corrupt the CRC of every Nth outgoing STATE")
+      ->check(CLI::NonNegativeNumber)
+      ->group(faults);
+  app.add_option("--delay-ms", o.delay_ms, "delay every outgoing message by MS")
+      ->check(config::non_negative_number("ms"))
+      ->group(faults);
+  app.add_option("--silent-after", o.silent_after_s, "send nothing after S seconds (still receives)")
+      ->check(config::non_negative_number("seconds"))
+      ->group(faults);
+  app.add_option("--stop-answering-after", o.stop_answering_after_s,
+                 "stop reading commands after S seconds (still sends state)")
+      ->check(config::non_negative_number("seconds"))
+      ->group(faults);
+  app.add_option("--bus-off-at", o.bus_off_at_s, "CAN: report bus-off at S seconds, silent for --bus-off-ms, restart")
+      ->check(config::non_negative_number("seconds"))
+      ->group(faults);
+  app.add_option("--bus-off-ms", o.bus_off_ms, "how long a bus-off lasts")
+      ->check(config::non_negative_number("ms"))
+      ->capture_default_str()
+      ->group(faults);
+  app.add_option("--seed", o.seed, "random seed for --drop-probability")->capture_default_str()->group(faults);
+  app.add_flag("--inject-on-signal", o.inject_on_signal,
+               "the faults above begin at SIGUSR1 instead of at the start (their times count from it); the tick it "
+               "began is printed on stderr")
+      ->group(faults);
+  app.add_option("--out-interval-ms", o.out_interval_ms,
+                 "a slow USB device (gadget hid or usb_bulk): take host->device transfers only every MS, so the "
+                 "host's writes wait for the device")
+      ->check(config::non_negative_number("ms"))
+      ->group(faults);
+  app.add_option("--hid-report-descriptor", hid_descriptor,
+                 "print the HID report descriptor of this kind as hex, for a gadget's configfs report_desc, and exit")
+      ->check(CLI::IsMember(kinds));
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
+  if (!hid_descriptor.empty()) return print_hid_descriptor(hid_descriptor), 0;
+
+  if (transport == "socketcan") o.device.transport.kind = config::TransportKind::socketcan;
+  else if (transport == "hid") o.device.transport.kind = config::TransportKind::hid;
+  else if (transport == "usb_bulk") o.device.transport.kind = config::TransportKind::usb_bulk;
+  if (!framing.empty()) o.device.transport.framing = framing, o.device.transport.can_fd = framing == "canfd";
+  o.device.transport.can_node_id = static_cast<std::uint32_t>(node);
   if (!rig_file.empty()) {
     config::Rig rig = config::load_rig(rig_file);
     const config::RigDevice* d = rig.find_device(rig_device);
     if (!d) throw std::invalid_argument(rig_file + ": no device named '" + rig_device + "' (--device)");
-    double watchdog = o.device.watchdogs.device_watchdog_ms;
+    const double watchdog = o.device.watchdogs.device_watchdog_ms;
     o.device = *d;
-    if (watchdog_given) o.device.watchdogs.device_watchdog_ms = watchdog;
+    if (app.count("--watchdog-ms") > 0) o.device.watchdogs.device_watchdog_ms = watchdog;
     o.kind = d->kind == config::DeviceKind::spacemouse ? "spacemouse" : "haptic_arm";
   }
   if (o.device.transport.kind == config::TransportKind::hid && o.device.transport.address.empty())
@@ -162,15 +165,12 @@ Options parse(int argc, char** argv) {
   if (o.device.transport.kind == config::TransportKind::socketcan && o.device.transport.framing != "can" &&
       o.device.transport.framing != "canfd")
     throw std::invalid_argument("--framing " + o.device.transport.framing + ": SocketCAN carries can or canfd");
-  if (o.kind != "haptic_arm" && o.kind != "spacemouse")
-    throw std::invalid_argument("--kind " + o.kind + ": choose haptic_arm or spacemouse");
-  if (o.drop_probability > 1) throw std::invalid_argument("--drop-probability must be within 0..1");
   const bool slow_capable = o.device.transport.kind == config::TransportKind::usb_bulk ||
                             (o.device.transport.kind == config::TransportKind::hid && is_gadget_hid(o));
   if (o.out_interval_ms > 0 && !slow_capable)
     throw std::invalid_argument("--out-interval-ms needs a USB link whose transfers the device takes: "
                                 "--transport usb_bulk, or hid with --address /dev/hidgN (uhid only queues them)");
-  return o;
+  return -1;
 }
 
 std::uint64_t now_ns() {
@@ -492,7 +492,8 @@ int main(int argc, char** argv) {
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
   try {
-    const Options options = parse(argc, argv);
+    Options options;
+    if (const int code = parse(argc, argv, options); code >= 0) return code;
     if (options.inject_on_signal) {
       struct sigaction inject {};
       inject.sa_handler = on_inject_signal;

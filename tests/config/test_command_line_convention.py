@@ -13,6 +13,7 @@ TOOLS = {
     "haptic-rt": (["--rig", "config/rigs/fake_single.toml", "--duration", "-1"], "--duration"),
     "haptic-device-probe": (["--address", "/tmp/nobody.sock", "--force", "1,2"], "--force"),
     "haptic-sim-standin": (["--shm-prefix", "nobody", "--pattern", "evil"], "--pattern"),
+    "haptic-fake-device": (["--address", "/tmp/nobody.sock", "--node", "16"], "--node"),
     "haptic-sim": (["--live", "--scene", "x.toml", "--threads", "many"], "--threads"),
     "haptic-render": (["--headless", "--out", "/tmp/nobody-frames", "--camera-pitch", "90"], "--camera-pitch"),
 }
