@@ -311,6 +311,36 @@ def live_run(binary, scene, out, prefix, duration_s="0.6"):
                            str(out)], capture_output=True, text=True, timeout=60)
 
 
+def test_the_live_sim_tells_systemd_it_is_ready_alive_and_stopping(binary, tmp_path):
+    # haptic-sim.service is Type=notify with a WatchdogSec: READY=1 once it publishes, WATCHDOG=1
+    # at half of WATCHDOG_USEC while it runs, STOPPING=1 at the end (libsystemd's sd_notify). The
+    # socket is read while it runs, as systemd does: a full datagram queue would hold the sender.
+    import socket
+    path = str(tmp_path / "notify.sock")
+    server = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    server.bind(path)
+    server.settimeout(0.2)
+    env = dict(os.environ, NOTIFY_SOCKET=path, WATCHDOG_USEC="100000")
+    sim = subprocess.Popen([str(binary("haptic-sim")), "--live", "--scene", str(write_scene(tmp_path / "scene")),
+                            "--backend", "cpu", "--threads", "1", "--duration", "0.6", "--status-every", "0",
+                            "--shm-prefix", f"hapfluid-test-notify-{os.getpid()}"],
+                           env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    messages = []
+    while True:
+        try:
+            messages.append(server.recv(4096).decode())
+            if messages[-1] == "STOPPING=1":
+                break
+        except socket.timeout:
+            if sim.poll() is not None:
+                break
+    _, err = sim.communicate(timeout=30)
+    server.close()
+    assert sim.returncode == 0, err
+    assert messages and messages[0] == "READY=1", messages
+    assert "WATCHDOG=1" in messages and messages[-1] == "STOPPING=1", messages
+
+
 def test_the_live_runner_reports_the_wall_clamp_as_a_fault(binary, source_dir, tmp_path):
     # A drop that falls through its floor's pressure (clamping_drop.toml): the live run says so
     # once, when the clamp first acts, counts it in its status lines and in stats.json, as a

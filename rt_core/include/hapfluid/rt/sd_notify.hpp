@@ -1,6 +1,7 @@
-// systemd's notify protocol, spoken directly over $NOTIFY_SOCKET (a datagram to a unix socket,
-// '@' meaning the abstract namespace). Harmless when not under systemd: every call is a no-op.
-// Used from haptic-rt's non-RT supervisor thread only.
+// systemd's notify protocol (libsystemd's sd_notify over $NOTIFY_SOCKET) for Type=notify units
+// with a WatchdogSec. Harmless when not under systemd: every call is a no-op. Its own library,
+// hapfluid_sd_notify, so that the sim links nothing of the loop or the device drivers. Called
+// from non-real-time threads only (haptic-rt's supervisor, the live sim's main thread).
 #pragma once
 
 #include <cstdint>
@@ -10,19 +11,15 @@ namespace hapfluid::rt {
 
 class SdNotifier {
  public:
-  SdNotifier();  // reads NOTIFY_SOCKET and WATCHDOG_USEC
-  ~SdNotifier();
-  SdNotifier(const SdNotifier&) = delete;
-  SdNotifier& operator=(const SdNotifier&) = delete;
+  SdNotifier();  // reads NOTIFY_SOCKET, WATCHDOG_USEC and WATCHDOG_PID
 
-  bool active() const { return fd_ >= 0; }
+  bool active() const { return active_; }
   bool send(const std::string& message);   // e.g. "READY=1", "WATCHDOG=1", "STATUS=..."
   // Half of WATCHDOG_USEC (systemd's advice), 0 when the unit has no watchdog.
   std::uint64_t watchdog_ping_interval_ns() const { return watchdog_interval_ns_; }
 
  private:
-  int fd_ = -1;
-  std::string path_;
+  bool active_ = false;
   std::uint64_t watchdog_interval_ns_ = 0;
 };
 
