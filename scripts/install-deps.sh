@@ -14,7 +14,7 @@ group="${1:-core}"
 
 debian_core=(
   build-essential cmake ninja-build pkg-config git
-  libtomlplusplus-dev libcli11-dev googletest libgtest-dev libgmock-dev
+  libtomlplusplus-dev libcli11-dev nlohmann-json3-dev googletest libgtest-dev libgmock-dev
   libvulkan-dev libvulkan-volk-dev mesa-vulkan-drivers vulkan-validationlayers vulkan-tools
   glslang-tools spirv-tools
   libglfw3-dev libpng-dev libstb-dev libglm-dev xvfb xauth

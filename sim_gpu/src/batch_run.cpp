@@ -4,64 +4,39 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <sstream>
 #include <stdexcept>
 
-#include "hapfluid/config/build_id.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/thread_pool.hpp"
 #include "hapfluid/sim/outputs.hpp"
+#include "hapfluid/sim/run_stats.hpp"
 
 namespace hapfluid::sim {
 namespace {
 
-std::string num(double v) { return csv_number(v); }
-
 std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchResult& r, double dt_min, double dt_max,
-                       bool complete, const std::string& error) {
-  const SimulationModel& m = solver.model();
-  const std::size_t fluid = m.fluid.size(), walls = m.wall_particle_count, statics = m.static_body_particle_count,
-                    bodies = m.body_particles.size();
-  const std::size_t total = fluid + walls + statics + bodies;
-  const double steps = static_cast<double>(r.steps);
-  const double wall = r.wall_time_s > 0 ? r.wall_time_s : 1e-12;
+                       const std::string& error) {
   const PhaseTimes t = solver.phase_times();
   const SolverIterations it = solver.iterations();
-  auto per_step_ms = [&](double s) { return num(steps > 0 ? 1000.0 * s / steps : 0.0); };
-  std::ostringstream j;
-  j << "{\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
-  if (!complete) j << "  \"error\": \"" << json_escape(error) << "\",\n";
-  j << "  \"build_id\": \"" << json_escape(config::build_id()) << "\",\n"
-    << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
-    << "  \"backend\": \"" << o.backend << "\",\n"
-    << "  \"solver\": \"" << solver.method() << "\",\n"
-    << "  \"threads\": " << solver.threads() << ",\n"
-    << "  \"particles\": {\"fluid\": " << fluid << ", \"boundary\": " << walls << ", \"static_body\": " << statics
-    << ", \"body\": " << bodies << ", \"total\": " << total << "},\n"
-    << "  \"steps\": " << r.steps << ",\n"
-    << "  \"dt_s\": {\"min\": " << num(dt_min) << ", \"max\": " << num(dt_max)
-    << ", \"mean\": " << num(steps > 0 ? r.simulated_time_s / steps : 0) << "},\n"
-    << "  \"simulated_time_s\": " << num(r.simulated_time_s) << ",\n"
-    << "  \"wall_time_s\": " << num(r.wall_time_s) << ",\n"
-    << "  \"steps_per_s\": " << num(steps / wall) << ",\n"
-    // Particles that are computed each step: fluid and dynamic body particles.
-    << "  \"particle_steps_per_s\": " << num(steps * static_cast<double>(fluid + bodies) / wall) << ",\n"
-    << "  \"real_time_factor\": " << num(r.simulated_time_s / wall) << ",\n"
-    << "  \"frames_exported\": " << r.frames_exported << ",\n"
-    << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"
-    << "  \"solver_iterations\": {\"density_per_step\": " << num(steps > 0 ? it.density_iterations / steps : 0)
-    << ", \"divergence_per_step\": " << num(steps > 0 ? it.divergence_iterations / steps : 0)
-    << ", \"viscosity_per_step\": " << num(steps > 0 ? it.viscosity_iterations / steps : 0)
-    << ", \"unconverged_solves\": " << it.unconverged_solves
-    << ", \"max_mean_density_error\": " << num(it.max_density_error) << "},\n"
-    << "  \"phase_ms_per_step\": {\"neighbour_search\": " << per_step_ms(t.neighbour_search_s)
-    << ", \"density\": " << per_step_ms(t.density_s) << ", \"forces\": " << per_step_ms(t.forces_s)
-    << ", \"pressure_solve\": " << per_step_ms(t.pressure_s)
-    << ", \"bodies\": " << per_step_ms(t.bodies_s) << ", \"integration\": " << per_step_ms(t.integration_s) << "}\n}\n";
-  return j.str();
+  const double steps = static_cast<double>(r.steps);
+  StatsJson j = batch_stats({&solver.model(), &o, &r, dt_min, dt_max, t, solver.clamped_particle_count(), error}, o.backend);
+  j["solver"] = solver.method();
+  j["threads"] = solver.threads();
+  auto per_step = [&](double n) { return steps > 0 ? n / steps : 0.0; };
+  j["solver_iterations"] = {{"density_per_step", per_step(static_cast<double>(it.density_iterations))},
+                            {"divergence_per_step", per_step(static_cast<double>(it.divergence_iterations))},
+                            {"viscosity_per_step", per_step(static_cast<double>(it.viscosity_iterations))},
+                            {"unconverged_solves", it.unconverged_solves},
+                            {"max_mean_density_error", it.max_density_error}};
+  j["phase_ms_per_step"] = {{"neighbour_search", per_step_ms(t.neighbour_search_s, steps)},
+                            {"density", per_step_ms(t.density_s, steps)},
+                            {"forces", per_step_ms(t.forces_s, steps)},
+                            {"pressure_solve", per_step_ms(t.pressure_s, steps)},
+                            {"bodies", per_step_ms(t.bodies_s, steps)},
+                            {"integration", per_step_ms(t.integration_s, steps)}};
+  return stats_text(j);
 }
-
 
 }  // namespace
 
@@ -139,10 +114,10 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   }
   r.wall_time_s = elapsed();
   if (!error.empty()) {
-    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, false, error));
+    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, error));
     throw std::runtime_error(error);
   }
-  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, true, ""));
+  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, ""));
   return r;
 }
 

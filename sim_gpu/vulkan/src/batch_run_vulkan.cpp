@@ -1,64 +1,43 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <stdexcept>
 
 #include "hapfluid/config/scene.hpp"
-#include "hapfluid/config/build_id.hpp"
 #include "hapfluid/sim/outputs.hpp"
+#include "hapfluid/sim/run_stats.hpp"
 #include "hapfluid/sim_vulkan/backend.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 
 namespace hapfluid::sim::vulkan {
 namespace {
 
-std::string num(double v) { return csv_number(v); }
-
-// stats.json of the cpu backend's batch run (same keys), plus the device, the GPU's per-pass
-// split and the validation counts.
+// stats.json of the cpu backend's batch run (the shared keys), plus the device, the GPU's
+// per-pass split and the validation counts.
 std::string stats_json(const VulkanSolver& solver, const BatchOptions& o, const BatchResult& r, double dt_min,
-                       double dt_max, bool complete, const std::string& error) {
-  const SimulationModel& m = solver.model();
-  const std::size_t fluid = m.fluid.size(), walls = m.wall_particle_count, statics = m.static_body_particle_count,
-                    bodies = m.body_particles.size();
-  const double steps = static_cast<double>(r.steps);
-  const double wall = r.wall_time_s > 0 ? r.wall_time_s : 1e-12;
+                       double dt_max, const std::string& error) {
   const PhaseTimes t = solver.phase_times();
   const PassTimes& g = solver.pass_times();
-  auto per_step_ms = [&](double s) { return num(steps > 0 ? 1000.0 * s / steps : 0.0); };
-  auto per_timed_step_ms = [&](double s) { return num(g.steps > 0 ? 1000.0 * s / static_cast<double>(g.steps) : 0.0); };
+  const double steps = static_cast<double>(r.steps), timed = static_cast<double>(g.steps);
   const ValidationCounts counts = solver.context().validation_counts();
-  std::ostringstream j;
-  j << "{\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
-  if (!complete) j << "  \"error\": \"" << json_escape(error) << "\",\n";
-  j << "  \"build_id\": \"" << json_escape(config::build_id()) << "\",\n"
-    << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
-    << "  \"backend\": \"vulkan\",\n"
-    << "  \"device\": {\"name\": \"" << json_escape(solver.device().name) << "\", \"type\": \"" << solver.device().type
-    << "\", \"driver\": \"" << json_escape(solver.device().driver) << "\"},\n"
-    << "  \"particles\": {\"fluid\": " << fluid << ", \"boundary\": " << walls << ", \"static_body\": " << statics
-    << ", \"body\": " << bodies << ", \"total\": " << fluid + walls + statics + bodies << "},\n"
-    << "  \"steps\": " << r.steps << ",\n"
-    << "  \"dt_s\": {\"min\": " << num(dt_min) << ", \"max\": " << num(dt_max)
-    << ", \"mean\": " << num(steps > 0 ? r.simulated_time_s / steps : 0) << "},\n"
-    << "  \"simulated_time_s\": " << num(r.simulated_time_s) << ",\n"
-    << "  \"wall_time_s\": " << num(r.wall_time_s) << ",\n"
-    << "  \"steps_per_s\": " << num(steps / wall) << ",\n"
-    << "  \"particle_steps_per_s\": " << num(steps * static_cast<double>(fluid + bodies) / wall) << ",\n"
-    << "  \"real_time_factor\": " << num(r.simulated_time_s / wall) << ",\n"
-    << "  \"frames_exported\": " << r.frames_exported << ",\n"
-    << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"
-    << "  \"phase_ms_per_step\": {\"neighbour_search\": " << per_step_ms(t.neighbour_search_s)
-    << ", \"density\": " << per_step_ms(t.density_s) << ", \"forces\": " << per_step_ms(t.forces_s)
-    << ", \"bodies\": " << per_step_ms(t.bodies_s) << ", \"integration\": " << per_step_ms(t.integration_s) << "},\n"
-    << "  \"gpu_pass_ms_per_step\": {\"timed_steps\": " << g.steps << ", \"sort\": " << per_timed_step_ms(g.sort_s)
-    << ", \"density\": " << per_timed_step_ms(g.density_s) << ", \"forces\": " << per_timed_step_ms(g.forces_s)
-    << ", \"bodies\": " << per_timed_step_ms(g.bodies_s) << ", \"integration\": " << per_timed_step_ms(g.integration_s)
-    << ", \"reductions\": " << per_timed_step_ms(g.reductions_s) << "},\n"
-    << "  \"vulkan_validation\": {\"enabled\": " << (solver.context().validation_enabled() ? "true" : "false")
-    << ", \"warnings\": " << counts.warnings << ", \"errors\": " << counts.errors << "}\n}\n";
-  return j.str();
+  StatsJson j = batch_stats({&solver.model(), &o, &r, dt_min, dt_max, t, solver.clamped_particle_count(), error}, "vulkan");
+  j["device"] = {{"name", solver.device().name}, {"type", solver.device().type}, {"driver", solver.device().driver}};
+  j["phase_ms_per_step"] = {{"neighbour_search", per_step_ms(t.neighbour_search_s, steps)},
+                            {"density", per_step_ms(t.density_s, steps)},
+                            {"forces", per_step_ms(t.forces_s, steps)},
+                            {"bodies", per_step_ms(t.bodies_s, steps)},
+                            {"integration", per_step_ms(t.integration_s, steps)}};
+  j["gpu_pass_ms_per_step"] = {{"timed_steps", g.steps},
+                               {"sort", per_step_ms(g.sort_s, timed)},
+                               {"density", per_step_ms(g.density_s, timed)},
+                               {"forces", per_step_ms(g.forces_s, timed)},
+                               {"bodies", per_step_ms(g.bodies_s, timed)},
+                               {"integration", per_step_ms(g.integration_s, timed)},
+                               {"reductions", per_step_ms(g.reductions_s, timed)}};
+  j["vulkan_validation"] = {{"enabled", solver.context().validation_enabled()},
+                            {"warnings", counts.warnings},
+                            {"errors", counts.errors}};
+  return stats_text(j);
 }
 
 }  // namespace
@@ -142,10 +121,10 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
   }
   r.wall_time_s = elapsed();
   if (!error.empty()) {
-    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, false, error));
+    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, error));
     throw std::runtime_error(error);
   }
-  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, true, ""));
+  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, ""));
   return r;
 }
 

@@ -1,0 +1,42 @@
+// stats.json of a batch run: the keys every backend writes (which build, scene, particles, steps
+// and their sizes, speed, frames, wall clamps, phase times), as JSON that each backend extends
+// with its own (the CPU solver's iterations, the GPU's device and pass times).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "hapfluid/sim/batch_run.hpp"
+#include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/solver.hpp"
+
+namespace hapfluid::sim {
+
+// Keys in the order written (a person reads the file).
+using StatsJson = nlohmann::ordered_json;
+
+struct RunRecord {
+  const SimulationModel* model = nullptr;
+  const BatchOptions* options = nullptr;
+  const BatchResult* result = nullptr;
+  double dt_min_s = 0, dt_max_s = 0;
+  PhaseTimes phases;
+  std::uint64_t clamped_particle_events = 0;
+  std::string error;  // empty: the run completed
+};
+
+// {"complete", ["error"], "build_id", "scene", "backend", "particles", "steps", "dt_s",
+//  "simulated_time_s", "wall_time_s", "steps_per_s", "particle_steps_per_s", "real_time_factor",
+//  "frames_exported", "clamped_particle_events"}; phase times are the backend's to add
+// (phase_ms_per_step), since the backends time different phases.
+StatsJson batch_stats(const RunRecord& run, const std::string& backend);
+
+// Milliseconds per step of a phase's total seconds over `steps` (0 before the first step).
+double per_step_ms(double total_s, double steps);
+
+// The JSON text of `stats`, indented, ending in a newline.
+std::string stats_text(const StatsJson& stats);
+
+}  // namespace hapfluid::sim
