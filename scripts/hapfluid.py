@@ -37,12 +37,13 @@ import json
 import math
 import os
 import pathlib
-import re
 import signal
 import subprocess
 import sys
 import tomllib
 import time
+
+import tomli_w
 
 import latency_report  # scripts/: cyclictest beside the loop, shared with latency_report.py --with-cyclictest
 
@@ -80,53 +81,34 @@ def scene_device_for(scene: dict, rig_name: str):
     return None
 
 
-def _vec(text: str) -> list[float]:
-    return [float(v) for v in text.strip().strip("[]").split(",")]
-
-
-def _fmt(v) -> str:
-    return "[" + ", ".join(f"{x:.6g}" for x in v) + "]"
-
-
 def device_scene(scene_path: pathlib.Path, out: pathlib.Path, delay_s: float, offsets: dict | None = None) -> pathlib.Path:
     """The scene as the fake devices play it:
       * every scripted motion segment starts delay_s later (lead-in): the hands hold their start
         poses while the loop engages and the fluid settles (the simulator starts last);
       * positions in the DEVICE frame: x_device = x_scene - offset for devices in `offsets`
         (private_rig_text), so the emulated arm stays inside its mechanical workspace;
-      * mesh paths absolute, so the copy can live anywhere."""
+      * mesh paths absolute, so the copy can live anywhere.
+    Read with tomllib and written with tomli-w: the copy holds the same tables, not the comments."""
     offsets = offsets or {}
-    lines, in_motion, has_start, section, device = [], False, False, "", None
-
-    def close_segment():
-        if in_motion and not has_start:
-            lines.append(f"start_s = {delay_s:.6g}")
-    for line in scene_path.read_text().splitlines():
-        stripped = line.split("#")[0].strip()
-        if stripped.startswith("["):
-            section = stripped
-            if stripped == "[[devices]]":
-                device = None
-            if not stripped.startswith("[[devices.motion.keyframes]]"):
-                close_segment()
-                in_motion, has_start = stripped == "[[devices.motion]]", False
-        elif section == "[[devices]]" and re.match(r"name\s*=", stripped):
-            device = stripped.split("=", 1)[1].strip().strip('"')
-        elif in_motion and re.match(r"(start_s|stop_s)\s*=", stripped):
-            key, value = [v.strip() for v in stripped.split("=", 1)]
-            has_start |= key == "start_s"
-            line = f"{key} = {float(value.replace('_', '')) + delay_s:.6g}"
-        elif device in offsets and (
-                (section == "[[devices]]" and re.match(r"start_position_m\s*=", stripped)) or
-                (section == "[[devices.motion.keyframes]]" and re.match(r"position_m\s*=", stripped))):
-            key, value = [v.strip() for v in stripped.split("=", 1)]
-            line = f"{key} = {_fmt([a - b for a, b in zip(_vec(value), offsets[device])])}"
-        line = re.sub(r'mesh\s*=\s*"(\.\./[^"]+)"', lambda m: f'mesh = "{(scene_path.parent / m.group(1)).resolve()}"', line)
-        lines.append(line)
-    close_segment()
+    scene = load_toml(scene_path)
+    for device in scene.get("devices", []):
+        offset = offsets.get(device.get("name"))
+        if offset is not None and "start_position_m" in device:
+            device["start_position_m"] = [a - b for a, b in zip(device["start_position_m"], offset)]
+        for segment in device.get("motion", []):
+            segment["start_s"] = segment.get("start_s", 0.0) + delay_s
+            if "stop_s" in segment:
+                segment["stop_s"] += delay_s
+            if offset is not None:
+                for key in segment.get("keyframes", []):
+                    if "position_m" in key:
+                        key["position_m"] = [a - b for a, b in zip(key["position_m"], offset)]
+    for body in scene.get("bodies", []):
+        if "mesh" in body and not pathlib.Path(body["mesh"]).is_absolute():
+            body["mesh"] = str((scene_path.parent / body["mesh"]).resolve())
     path = out / "scene_devices.toml"
     path.write_text(f"# {scene_path.name} for the fake devices: motions {delay_s} s later (lead-in), device frame\n" +
-                    "\n".join(lines) + "\n")
+                    tomli_w.dumps(scene))
     return path
 
 
@@ -139,22 +121,18 @@ def private_rig_text(text: str, scene: dict, tag: str) -> tuple[str, dict]:
     (emulated) device the translation from the scene frame to its device frame, so the fake arm
     plays the scene's hand inside its mechanical workspace (end stops at +-0.3 m around its origin):
     x_scene = workspace_centre + x_rig (haptic-sim, the scene's devices.workspace_centre_m, default
-    the hand's start) and x_rig = offset + x_device (the rig's mapping). The rig itself is not
-    changed. Returns (text, {scene device: workspace_centre + offset})."""
-    names = []
-
-    def replace(match):
-        names.append(match.group(1))
-        return f'address = "/tmp/hapfluid-{tag}-{len(names)}.sock"'
+    the hand's start) and x_rig = offset + x_device (the rig's mapping). The rig's devices are
+    otherwise unchanged. Returns (TOML text, {scene device: workspace_centre + offset})."""
+    rig = tomllib.loads(text)
     offsets = {}
-    for block in re.split(r"(?m)^(?=\[\[devices\]\])", text):
-        if not block.startswith("[[devices]]") or 'kind = "loopback"' not in block:
-            continue
-        name = re.search(r'(?m)^name\s*=\s*"([^"]+)"', block).group(1)
+    loopbacks = [d for d in rig.get("devices", []) if d.get("transport", {}).get("kind") == "loopback"]
+    for k, device in enumerate(loopbacks, start=1):
+        device["transport"]["address"] = f"/tmp/hapfluid-{tag}-{k}.sock"
+        name = device.get("name")
         sdev = scene_device_for(scene, name)
         if sdev is None:
             continue
-        mapping = tomllib.loads(block).get("devices", [{}])[0].get("mapping", {})
+        mapping = device.get("mapping", {})
         scale = float(mapping.get("scale", 1.0))
         rotation = [float(v) for v in mapping.get("rotation", [1.0, 0.0, 0.0, 0.0])]
         if abs(scale - 1.0) > 1e-12 or max(abs(a - b) for a, b in zip(rotation, [1.0, 0.0, 0.0, 0.0])) > 1e-12:
@@ -164,8 +142,7 @@ def private_rig_text(text: str, scene: dict, tag: str) -> tuple[str, dict]:
         centre = [float(v) for v in sdev.get("workspace_centre_m", sdev.get("start_position_m", [0.0, 0.0, 0.0]))]
         offset = [float(v) for v in mapping.get("offset_m", [0.0, 0.0, 0.0])]
         offsets[sdev["name"]] = [c + o for c, o in zip(centre, offset)]
-    text = re.sub(r'address\s*=\s*"(/[^"]+\.sock)"', replace, text)
-    return text, offsets
+    return tomli_w.dumps(rig), offsets
 
 
 def private_rig(rig: pathlib.Path, out: pathlib.Path, tag: str, scene: dict) -> tuple[pathlib.Path, dict]:

@@ -26,7 +26,7 @@ debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
 # clang-14 (via clang) compiles the fuzzing build, libclang-rt-14-dev holds libFuzzer and the
 # sanitizer runtimes, llvm-14 the llvm-symbolizer that turns sanitizer reports into file:line.
 debian_fuzz=(clang libclang-rt-14-dev llvm-14)
-python_packages=(pytest numpy matplotlib python-can cantools hypothesis)
+python_packages=(pytest numpy matplotlib python-can cantools hypothesis tomli-w)
 # Only bench_splishsplash.py uses it; pinned so that its scene format and log stay what we parse.
 python_bench=(pysplishsplash==2.19.0)
 
