@@ -255,6 +255,14 @@ def test_missing_arguments_print_usage(binary):
     assert result.stderr.startswith("haptic-sim: --scene is required") and len(result.stderr.splitlines()) == 1
 
 
+def test_an_option_given_twice_takes_its_last_value(binary, tmp_path):
+    # Launchers and test harnesses append overrides to a base command line.
+    out = tmp_path / "out"
+    result = run(binary, write_scene(tmp_path / "scene"), out, "--threads", "3", "--export-every", "0")
+    assert result.returncode == 0, result.stderr
+    assert json.loads((out / "stats.json").read_text())["threads"] == 3
+
+
 def test_batch_mode_needs_an_output_folder_and_live_options_need_live(binary, tmp_path):
     scene = str(write_scene(tmp_path / "scene"))
     result = subprocess.run([str(binary("haptic-sim")), "--scene", scene], capture_output=True, text=True)
