@@ -20,7 +20,7 @@ using namespace hapfluid::config;
 
 int main(int argc, char** argv) {
   CLI::App app{"Validates hapfluid rig and scene files (TOML, SI units; docs/config-reference.md).", "haptic-config"};
-  add_version_flag(app);
+  apply_convention(app);
   app.require_subcommand(1, 1);
   CLI::App* check = app.add_subcommand("check", "validate each file; one line per problem, exit 1 if any");
   std::string rig_path, kind_name = "auto";

@@ -74,9 +74,7 @@ int parse(int argc, char** argv, Options& o) {
                "uhid or a USB gadget, or USB bulk through FunctionFS), with scripted hand motion and fault "
                "injection.",
                "haptic-fake-device"};
-  // An option given twice takes its last value, as before CLI11: launchers append overrides.
-  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  config::add_version_flag(app);
+  config::apply_convention(app);
   app.add_option("--rig", rig_file, "take transport, node, watchdog and limits from a rig file (with --device)");
   app.add_option("--device", rig_device, "the rig device NAME");
   app.add_option("--transport", transport, "the link")

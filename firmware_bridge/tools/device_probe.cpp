@@ -40,7 +40,7 @@ int parse(int argc, char** argv, Options& o) {
   int node = static_cast<int>(o.device.transport.can_node_id);
   CLI::App app{"Drives one device through the 1 kHz loop's own driver and reports what it saw (JSON on stdout).",
                "haptic-device-probe"};
-  config::add_version_flag(app);
+  config::apply_convention(app);
   CLI::Option* rig_opt = app.add_option("--rig", rig_file, "a rig file: probe its device --device");
   app.add_option("--device", rig_device, "the rig device to probe")->needs(rig_opt);
   rig_opt->needs("--device");

@@ -50,7 +50,7 @@ int parse(int argc, char** argv, Args& a) {
   CLI::App app{"Draws the fluid (paper section 5) in its own process. Modes: a GLFW window (default; drag = orbit, "
                "wheel = zoom, Esc = quit) or --headless PNG frames. Sources: --replay, --synthetic or --live.",
                "haptic-render"};
-  config::add_version_flag(app);
+  config::apply_convention(app);
   app.add_flag("--headless", a.headless, "PNG frames DIR/frame_NNNNNN.png (and DIR/frames.mp4 when ffmpeg exists)");
   app.add_option("--out", a.out, "headless: the frame folder");
   app.add_option("--replay", a.replay, "a recorded run of `haptic-sim --out RUN_DIR` (VTK frames + bodies.csv)");

@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   Args args;
   CLI::App app{"The 1 kHz coupling process: devices, the safety layer and the sim's wrench (rt_core/README.md).",
                "haptic-rt"};
-  config::add_version_flag(app);
+  config::apply_convention(app);
   app.add_option("--rig", args.rig, "the rig file (TOML)")->required();
   app.add_option("--duration", args.duration_s, "stop after this many seconds (0: until SIGINT/SIGTERM)")
       ->check(config::non_negative_number("seconds"))

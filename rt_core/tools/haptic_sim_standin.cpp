@@ -44,7 +44,7 @@ int main(int argc, char** argv) {
   std::string force_text = "0,0,2", torque_text = "0,0,0";
   CLI::App app{"A stand-in sim writer for tests and fault injection: publishes sim samples of a chosen pattern.",
                "haptic-sim-standin"};
-  config::add_version_flag(app);
+  config::apply_convention(app);
   app.add_option("--shm-prefix", prefix, "the shared-memory prefix")->capture_default_str();
   app.add_option("--rate", rate_hz, "samples per second")->check(config::positive_number("samples per second"))->capture_default_str();
   app.add_option("--duration", duration_s, "stop after this many seconds (0: on SIGINT/SIGTERM)")

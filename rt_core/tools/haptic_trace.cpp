@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   std::string out_path, prefix = "hapfluid";
   double duration_s = 0, wait_s = 10;
   CLI::App app{"Drains haptic-rt's trace ring to a CSV file, as a separate non-real-time process.", "haptic-trace"};
-  config::add_version_flag(app);
+  config::apply_convention(app);
   app.add_option("--out", out_path, "the CSV file to write")->required();
   app.add_option("--shm-prefix", prefix, "the shared-memory prefix of the haptic-rt to follow")->capture_default_str();
   app.add_option("--duration", duration_s, "stop after this many seconds (0: when haptic-rt stops)")

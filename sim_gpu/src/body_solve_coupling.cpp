@@ -1,7 +1,6 @@
 #include "body_solve_coupling.hpp"
 
 #include <algorithm>
-#include <cmath>
 
 namespace hapfluid::sim::detail {
 namespace {
@@ -18,6 +17,15 @@ Mat6 inverse6(const double a[6][6]) {
     for (int r = 0; r < 6; ++r) inv[6 * r + c] = x[r];
   }
   return inv;
+}
+
+// Adds the wrench of force (fx, fy, fz) at body particle p to w: the force and its torque
+// about the body's centre of mass c.
+inline void add_wrench(double* w, const SortedSolids& bodies, std::uint32_t p, const float* c, double fx, double fy,
+                       double fz) {
+  const double rx = bodies.x[p] - c[0], ry = bodies.y[p] - c[1], rz = bodies.z[p] - c[2];
+  w[0] += fx, w[1] += fy, w[2] += fz;
+  w[3] += ry * fz - rz * fy, w[4] += rz * fx - rx * fz, w[5] += rx * fy - ry * fx;
 }
 
 Vec6 times(const Mat6& a, const Vec6& v) {
@@ -70,11 +78,7 @@ void BodySolveCoupling::begin_step(const SimulationModel& m,
       for (std::uint32_t q = first; q < last; ++q) {
         const std::uint32_t p = l.index[q];
         const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
-        const double gx = l.gx[q], gy = l.gy[q], gz = l.gz[q];
-        const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
-        double* j = j6 + 6 * b;
-        j[0] += gx, j[1] += gy, j[2] += gz;
-        j[3] += ry * gz - rz * gy, j[4] += rz * gx - rx * gz, j[5] += rx * gy - ry * gx;
+        add_wrench(j6 + 6 * b, bodies, p, &com_[3 * b], l.gx[q], l.gy[q], l.gz[q]);
       }
       const double factor = fields.factor[i];
       for (std::uint32_t q = first; q < last; ++q) {
@@ -134,17 +138,12 @@ void BodySolveCoupling::add_forces(int worker, const SortedSolids& bodies, const
     for (std::uint32_t q = first; q < last; ++q) {
       const std::uint32_t p = lists.index[q];
       const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
-      const double fx = mk * lists.gx[q], fy = mk * lists.gy[q], fz = mk * lists.gz[q];
-      const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
-      double* f = acc + 6 * b;
-      f[0] += fx, f[1] += fy, f[2] += fz;
-      f[3] += ry * fz - rz * fy, f[4] += rz * fx - rx * fz, f[5] += rx * fy - ry * fx;
+      add_wrench(acc + 6 * b, bodies, p, &com_[3 * b], mk * lists.gx[q], mk * lists.gy[q], mk * lists.gz[q]);
     }
   }
 }
 
 void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodies, ThreadPool& pool) {
-  mismatch_ = 0;
   for (std::size_t b = 0; b < bodies_; ++b) {
     if (!dynamic_[b]) continue;
     for (int w = 0; w < workers_; ++w) {
@@ -156,8 +155,6 @@ void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodi
     for (int k = 0; k < 6; ++k) gap[k] = u_start_[b][k] + pushed[k] - u_[b][k];
     const Vec6 step = times(relax_[b], gap);
     for (int k = 0; k < 6; ++k) u_[b][k] += step[k];
-    for (int k = 0; k < 3; ++k) gap[k] -= step[k];
-    mismatch_ = std::max(mismatch_, std::sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]));
   }
   BodyParticles& bp = m.body_particles;
   pool.parallel_for(bodies.size(), [&](std::size_t begin, std::size_t end, int) {

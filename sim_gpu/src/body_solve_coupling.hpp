@@ -60,8 +60,6 @@ class BodySolveCoupling {
 
   // The force and torque (about the centre of mass) the current solve has put on the body.
   Vec6 solve_force(std::size_t body) const { return force_[body]; }
-  // Largest |u_start + dt A^-1 F - u| (linear part, m/s) left after the last update.
-  double last_mismatch_m_s() const { return mismatch_; }
 
  private:
   bool active_ = false;
@@ -76,7 +74,6 @@ class BodySolveCoupling {
   std::vector<double> worker_force_;   // 6 per body per worker
   std::vector<double> worker_response_;  // 36 per body per worker: sum factor J J^T
   std::vector<double> worker_j_;       // 6 per body per worker, one particle's J
-  double mismatch_ = 0;
 };
 
 }  // namespace hapfluid::sim::detail

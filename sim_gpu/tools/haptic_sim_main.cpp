@@ -69,9 +69,7 @@ int main(int argc, char** argv) {
       "/<prefix>.sim_samples and particle frames to /<prefix>.particles (haptic-render); rig device N drives the "
       "scene device with source = \"rig\" and rig_device = \"N\", else the scene device named N "
       "(sim_gpu/live/README.md).");
-  // An option given twice takes its last value, as before CLI11: launchers append overrides.
-  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  config::add_version_flag(app);
+  config::apply_convention(app);
   auto* live_flag = app.add_flag("--live", live_mode, "run as the live simulator (simulated time follows the wall clock)");
   app.add_option("--scene", scene, "scene file (TOML)")->required();
   app.add_option("--out", out, "output folder (batch: required; live: couplings.csv, bodies.csv, stats.json of the run)");

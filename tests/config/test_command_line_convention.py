@@ -45,3 +45,32 @@ def test_a_usage_error_is_one_line_naming_the_option_with_exit_2(binary, tool):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith(f"{tool}: ") and option in lines[0], result.stderr
+
+
+# tool -> an option with a valid value, given again before the usage error
+REPEATED = {
+    "haptic-config": ["check", "--rig", "config/rigs/fake_single.toml"],
+    "haptic-trace": ["--out", "/nonexistent/other.csv"],
+    "haptic-rt": ["--rig", "config/rigs/fake_dual.toml"],
+    "haptic-device-probe": ["--address", "/tmp/other.sock"],
+    "haptic-sim-standin": ["--shm-prefix", "other"],
+    "haptic-fake-device": ["--address", "/tmp/other.sock"],
+    "haptic-sim": ["--scene", "y.toml"],
+    "haptic-render": ["--out", "/tmp/other-frames"],
+}
+
+
+@pytest.mark.parametrize("tool", sorted(TOOLS))
+def test_an_option_given_twice_takes_its_last_value_on_every_tool(binary, tool):
+    # Launchers append overrides to a base command line: a repeated option is not a usage error
+    # (CLI11 would say "At Most 1 required"), so the line names the real one.
+    args, option = TOOLS[tool]
+    repeated = REPEATED[tool]
+    if tool == "haptic-config":
+        args = repeated + ["--rig", "config/rigs/fake_single.toml"] + args[1:]
+    else:
+        args = repeated + args
+    result = run(binary, tool, *args)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and option in lines[0] and "At Most" not in lines[0], result.stderr

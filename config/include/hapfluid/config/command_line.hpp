@@ -72,8 +72,11 @@ inline CLI::Validator three_numbers() {
       "X,Y,Z");
 }
 
-// Adds --version to a tool's App; call before parse_command_line.
-inline void add_version_flag(CLI::App& app) {
+// The convention's parts that live on the App; call before adding options:
+//  - `--version`;
+//  - an option given twice takes its last value, so a launcher can append overrides.
+inline void apply_convention(CLI::App& app) {
+  app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.set_version_flag("--version", app.get_name() + " " + build_id(), "print the build id and exit");
 }
 
