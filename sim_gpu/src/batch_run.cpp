@@ -27,6 +27,7 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
   j["solver_iterations"] = {{"density_per_step", per_step(static_cast<double>(it.density_iterations))},
                             {"divergence_per_step", per_step(static_cast<double>(it.divergence_iterations))},
                             {"viscosity_per_step", per_step(static_cast<double>(it.viscosity_iterations))},
+                            {"explicit_viscosity_steps", it.explicit_viscosity_steps},
                             {"unconverged_solves", it.unconverged_solves},
                             {"max_mean_density_error", it.max_density_error}};
   j["phase_ms_per_step"] = {{"neighbour_search", per_step_ms(t.neighbour_search_s, steps)},

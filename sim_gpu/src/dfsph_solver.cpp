@@ -256,12 +256,16 @@ void DfsphSolver::non_pressure_forces(float dt) {
     }
   });
   iterations_.viscosity_iterations += static_cast<std::uint64_t>(viscosity_solve(dt));
-  // The bodies' share of the viscous pair terms, from the velocities the solve ended on.
-  if (m_.body_particles.size() > 0)
-    pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) {
-      detail::body_fluid_forces(m_.params, f, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::viscous,
-                                m_.body_particles, b, e);
-    });
+}
+
+// The bodies' share of the viscous pair terms, from the fluid velocities the fluid's own terms
+// were evaluated at, so that what the fluid gains the bodies lose.
+void DfsphSolver::body_viscous_forces() {
+  if (m_.body_particles.size() == 0) return;
+  pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) {
+    detail::body_fluid_forces(m_.params, m_.fluid, fluid_sort_.cell_start.data(), fields_,
+                              detail::BodyForcePart::viscous, m_.body_particles, b, e);
+  });
 }
 
 // Preconditioned conjugate gradients (Jacobi) on K v = b, started from the velocities after
@@ -272,7 +276,10 @@ int DfsphSolver::viscosity_solve(float dt) {
   if (n == 0) return 0;
   bool any = m_.params.fluid_viscosity_pa_s > 0;
   for (const RigidBody& b : m_.bodies) any = any || b.viscosity_pa_s > 0;
-  if (!any) return 0;
+  if (!any) {
+    body_viscous_forces();
+    return 0;
+  }
   detail::DfsphFields& d = fields_;
   auto reduce = [&](int k) {
     double s = 0;
@@ -284,20 +291,41 @@ int DfsphSolver::viscosity_solve(float dt) {
     detail::viscosity_apply(m_.params, f, fluid_statics_, body_view_, d, lists_[w], ranges_.data(), b, e, dt, x, y, z,
                             ox, oy, oz);
   };
-  // r = b - K v, p = M^-1 r; dots: r . p and b . b.
+  // r = b - K v, p = M^-1 r; dots: r . p and b . b; and each worker's largest diagonal excess
+  // sum_a (K_ii,aa - 1), for the bound on K's spectrum below.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
     detail::viscosity_rhs(m_.params, f, fluid_statics_, body_view_, lists_[w], ranges_.data(), b, e, dt, d);
     apply(f.vx.data(), f.vy.data(), f.vz.data(), d.cg_ax.data(), d.cg_ay.data(), d.cg_az.data(), b, e, w);
     double rz = 0, bb = 0;
+    float excess = 0;
     for (std::size_t i = b; i < e; ++i) {
       d.cg_rx[i] = d.visc_bx[i] - d.cg_ax[i], d.cg_ry[i] = d.visc_by[i] - d.cg_ay[i], d.cg_rz[i] = d.visc_bz[i] - d.cg_az[i];
       d.cg_px[i] = d.visc_inv_diag_x[i] * d.cg_rx[i], d.cg_py[i] = d.visc_inv_diag_y[i] * d.cg_ry[i],
       d.cg_pz[i] = d.visc_inv_diag_z[i] * d.cg_rz[i];
       rz += d.cg_rx[i] * d.cg_px[i] + d.cg_ry[i] * d.cg_py[i] + d.cg_rz[i] * d.cg_pz[i];
       bb += d.visc_bx[i] * d.visc_bx[i] + d.visc_by[i] * d.visc_by[i] + d.visc_bz[i] * d.visc_bz[i];
+      excess = std::max(excess, 1.0f / d.visc_inv_diag_x[i] + 1.0f / d.visc_inv_diag_y[i] + 1.0f / d.visc_inv_diag_z[i] - 3.0f);
     }
     worker_dots_[2 * w] = rz, worker_dots_[2 * w + 1] = bb;
+    worker_error_[w] = excess;
   });
+  // A viscosity as low as water's barely acts within one step. K = I + dt L, and every pair term
+  // of dt L is c (x_ij x_ij^T) (a rank-one block), so a row of dt L sums in magnitude to at most
+  // 2 sqrt(3) times particle i's diagonal excess (Gershgorin): that bounds dt L's largest
+  // eigenvalue lambda. The explicit step v + r (r = b - K v, the viscous change at v) damps a mode
+  // by 1 - lambda where the implicit one damps it by 1 / (1 + lambda); they differ by at most
+  // lambda^2 of the mode, so when lambda^2 is within the solve's own tolerance the explicit step
+  // is the solve's answer, at no further pass.
+  double lambda = 0;
+  for (int w = 0; w < pool_.size(); ++w) lambda = std::max(lambda, 2.0 * std::sqrt(3.0) * worker_error_[w]);
+  if (lambda * lambda <= kViscosityTolerance) {
+    body_viscous_forces();
+    pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
+      for (std::size_t i = b; i < e; ++i) f.vx[i] += d.cg_rx[i], f.vy[i] += d.cg_ry[i], f.vz[i] += d.cg_rz[i];
+    });
+    ++iterations_.explicit_viscosity_steps;
+    return 0;
+  }
   double rz = reduce(0);
   const double limit = kViscosityTolerance * kViscosityTolerance * reduce(1);
   const int max_iterations = m_.params.incompressible.max_iterations;
@@ -350,6 +378,7 @@ int DfsphSolver::viscosity_solve(float dt) {
     });
   }
   if (it >= max_iterations && rr > limit) ++iterations_.unconverged_solves;
+  body_viscous_forces();
   return it;
 }
 

@@ -10,7 +10,8 @@
 //     the last step's stiffness;
 //  3. non-pressure forces: gravity and the scene's XSPH fraction, then viscosity (the SPH Laplacian
 //     of Monaghan 2005 with the fluid's and each body's viscosity, eq. 9's pairing) solved
-//     implicitly (implicit_viscosity.hpp), so that no viscosity limits the step;
+//     implicitly (implicit_viscosity.hpp), so that no viscosity limits the step; a viscosity so
+//     low that one explicit step is as exact as the solve (water's) takes that step instead;
 //  4. constant-density solve on the predicted velocities (rho* = rho0), warm-started likewise;
 //  5. bodies: the pressure and viscous forces the fluid received from each body particle, with
 //     the opposite sign (two-way coupling, Akinci et al. 2012), plus contacts; Algorithm 2.
@@ -103,8 +104,10 @@ class DfsphSolver final : public Solver {
   void sort_and_build_pairs();
   void divergence_solve(float dt);
   void non_pressure_forces(float dt);
-  // The viscosity solve on the velocities after gravity and XSPH; returns CG iterations.
+  // The viscosity solve on the velocities after gravity and XSPH, then the bodies' viscous
+  // forces; returns CG iterations (0 for an explicit step).
   int viscosity_solve(float dt);
+  void body_viscous_forces();
   void density_solve(float dt);
   // Contacts between solids, from the positions at the start of the step.
   void body_contacts();

@@ -32,6 +32,7 @@ struct SolverIterations {
   std::uint64_t density_iterations = 0;
   std::uint64_t divergence_iterations = 0;
   std::uint64_t viscosity_iterations = 0;  // conjugate-gradient iterations of the implicit viscosity
+  std::uint64_t explicit_viscosity_steps = 0;  // steps whose viscosity was one explicit step (as exact)
   std::uint64_t unconverged_solves = 0;   // solves that stopped at max_solver_iterations
   double last_density_error = 0;          // mean (rho* - rho0) / rho0 of the last constant-density solve
   double max_density_error = 0;           // largest such mean over the run
