@@ -127,6 +127,14 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   }
 
   // auto: the rule in live_backend.hpp.
+  if (model.params.solver != config::PressureSolver::wcsph) {
+    const std::string why = std::string("the Vulkan backend runs fluid.solver = \"wcsph\" only, this scene uses \"") +
+                            config::to_string(model.params.solver) + "\"";
+    log << "haptic-sim: notice: --backend auto: " << why << "; running on the cpu backend\n";
+    r.solver = make_cpu();
+    r.reason = "auto: " + why;
+    return r;
+  }
   std::unique_ptr<LiveSolver> probe;
   try {
     probe = make_vulkan(model, o);

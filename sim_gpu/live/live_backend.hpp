@@ -5,7 +5,8 @@
 //           with the cause and the fix when no Vulkan device can run the scene.
 //   auto    (the default) Vulkan on any usable device (GPU or lavapipe) IF it keeps up with the
 //           wall clock on this scene, else the faster backend, said loudly:
-//             1. no usable Vulkan device -> cpu, with a one-line notice saying why;
+//             1. a scene whose fluid.solver the Vulkan backend does not run (it runs wcsph),
+//                or no usable Vulkan device -> cpu, with a one-line notice saying why;
 //             2. a probe: the scene's first ~0.3 s (at most 0.6 s of wall time) stepped on a
 //                throw-away Vulkan solver, devices at their start pose. Real-time factor
 //                >= 1.1 (10% headroom for publishing and the other processes) -> vulkan;
@@ -14,9 +15,9 @@
 //           The live run starts at simulated time 0 on a fresh solver either way, and still
 //           reports its real-time factor and says when it cannot keep up (live_runner.hpp).
 //
-// Why a probe: on a 2-core machine lavapipe steps the default scene (spoon_stirring, ~850 fluid
-// particles, ~1250 steps per simulated second) at ~400-600 steps/s while the cpu backend on one
-// thread makes ~1500 (sim_gpu/live/README.md has the numbers); on a rig with a GPU, Vulkan wins.
+// Why a probe: on a 2-core machine lavapipe steps a weakly compressible stirring scene (~850
+// fluid particles, ~1250 steps per simulated second) at ~400-600 steps/s while the cpu backend on
+// one thread makes ~1500 (sim_gpu/live/README.md has the numbers); on a rig with a GPU, Vulkan wins.
 // The rule is "Vulkan by default, never a silently slowed fluid": the probe decides
 // which on the machine and scene at hand instead of a hard-coded device list.
 #pragma once

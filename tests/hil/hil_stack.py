@@ -309,23 +309,26 @@ class Stack:
         self.started_at = {}
 
     def scene_variant(self, scene, name, **motion):
-        """A copy of a shipped scene whose scripted device motions have these keys replaced (scene
-        time, before the lead-in), e.g. stop_s=4.5 for a hand that comes to rest then (an
-        oscillation fades out to its start pose). For fake_device's motion="scene:<path>:<device>",
-        or for sim() (its scripted hands, played until the loop's device states appear). Lives in
-        <dir>/scenes beside a link to the shipped meshes, so the scene's relative mesh paths still
-        resolve."""
-        scenes, meshes = self.dir / "scenes", self.dir / "meshes"
+        """A copy of a scene (a shipped scene's name, or a path) whose scripted device motions have
+        these keys replaced (scene time, before the lead-in), e.g. stop_s=4.5 for a hand that
+        comes to rest then (an oscillation fades out to its start pose). For fake_device's
+        motion="scene:<path>:<device>", or for sim() (its scripted hands, played until the loop's
+        device states appear). Lives in <dir>/scenes; its mesh paths are made absolute, so they
+        resolve as they did beside the original."""
+        source = scene if isinstance(scene, pathlib.Path) else SCENES / f"{scene}.toml"
+        scenes = self.dir / "scenes"
         scenes.mkdir(exist_ok=True)
-        if not meshes.exists():
-            meshes.symlink_to(SCENES.parent / "meshes")
         lines, in_motion = [], False
-        for line in (SCENES / f"{scene}.toml").read_text().splitlines():
+        for line in source.read_text().splitlines():
             stripped = line.split("#")[0].strip()
             if stripped.startswith("["):
                 in_motion = stripped == "[[devices.motion]]"
-            key = stripped.split("=", 1)[0].strip()
-            lines.append(f"{key} = {motion[key]}" if in_motion and "=" in stripped and key in motion else line)
+            key, _, value = (part.strip() for part in stripped.partition("="))
+            if in_motion and key in motion:
+                line = f"{key} = {motion[key]}"
+            elif key == "mesh" and value:
+                line = f"mesh = \"{(source.parent / value.strip(chr(34))).resolve()}\""
+            lines.append(line)
         path = scenes / f"{name}.toml"
         path.write_text("\n".join(lines) + "\n")
         return path

@@ -4,8 +4,8 @@ with the hand rendering the sim's wrench, within the rig's limits, with the sign
 Real processes over loopback (hil_stack.py), fake_single rig (max_force_n 8, max_torque_nm 0.4).
 
 The hand rests at its start pose (motion "hold"), the spoon's rest pose in the scene: a floating
-spoon (700 kg/m3) that the hand holds down, a steady ~1.4 N upward that passes the engage gate
-once the fluid has settled around it. (A stirring hand may rightly be kept at the gate: the
+spoon (700 kg/m3) in water that the hand holds down, a steady ~1.0 N upward that passes the engage
+gate once the fluid has settled around it. (A stirring hand may rightly be kept at the gate: the
 killed-sim test in test_fault_injection.py says why.)"""
 import itertools
 import random
@@ -20,9 +20,9 @@ from hil_stack import (LINK_FAULTS, Stack, assert_renders_the_sims_wrench, asser
 MAX_FORCE_N, MAX_TORQUE_NM = 8.0, 0.4
 PARTS = ("device", "rt", "sim", "render")
 # Last part up -> the sim's wrench on the hand, in simulated time (hil_stack says why). The engage
-# gate waits for a steady load, and a freshly started fluid sloshes around the resting spoon (its
-# ~1.4 N swinging by +-0.3 N) for a while; a sim started before the loop has also played the
-# scene's stroke meanwhile (it had no device pose), so its spoon first swings back to the hand.
+# gate waits for a steady load, and a freshly started fluid settles around the resting spoon for a
+# while; a sim started before the loop has also played the scene's stroke meanwhile (it had no
+# device pose), so its spoon first swings back to the hand.
 # Measured 0.0-2.0 s on the 2-core dev VM, where the sim ran at a real-time factor of ~0.9.
 RENDERED_WITHIN_S = 3.0
 

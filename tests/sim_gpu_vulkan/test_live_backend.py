@@ -10,7 +10,8 @@ import subprocess
 import pytest
 
 LIGHT = "tests/sim_gpu_vulkan/scenes/live_stirring_light.toml"  # 100 steps per simulated second
-STIRRING = "config/scenes/spoon_stirring.toml"  # make run's default scene, ~950 steps/s
+STIRRING = "tests/sim_gpu_vulkan/scenes/stirring_wcsph.toml"  # ~950 steps per simulated second
+DEFAULT_SCENE = "config/scenes/spoon_stirring.toml"  # make run's; divergence-free
 MIN_VULKAN_RTF = 1.1  # live_backend.hpp: auto runs Vulkan when its probe's real-time factor is at least this
 
 
@@ -67,7 +68,21 @@ def test_auto_runs_vulkan_on_a_scene_it_keeps_up_with(binary, source_dir, tmp_pa
     assert stats["particle_frames_published"] >= 55  # 30 Hz scene frames, read back from the device
 
 
-def test_auto_on_the_default_scene_runs_the_faster_backend_and_says_why(binary, source_dir, tmp_path):
+def test_auto_on_the_default_scene_runs_the_cpu_backend_with_a_notice_naming_its_solver(binary, source_dir, tmp_path):
+    # The Vulkan backend runs the weakly compressible solver only: a divergence-free scene goes to
+    # the cpu backend at once, without a probe, and says why in one line.
+    result = live(binary, source_dir, tmp_path, DEFAULT_SCENE, "auto")
+    assert result.returncode == 0, result.stderr
+    notices = [l for l in result.stderr.splitlines() if "notice" in l.lower()]
+    assert len(notices) == 1 and '"dfsph"' in notices[0] and '"wcsph" only' in notices[0], result.stderr
+    stats = json.loads((tmp_path / "stats.json").read_text())
+    assert stats["complete"] and stats["backend"] == "cpu"
+    choice = stats["backend_choice"]
+    assert choice["vulkan_probe"] is None and choice["cpu_probe"] is None and '"dfsph"' in choice["reason"]
+    assert "backend cpu on " in start_line(result.stderr)
+
+
+def test_auto_on_a_scene_vulkan_cannot_keep_up_with_runs_the_faster_backend_and_says_why(binary, source_dir, tmp_path):
     # Never a silently slowed fluid: when Vulkan's probe cannot keep up, auto runs whichever
     # backend is faster and says so loudly with both numbers (on this machine lavapipe makes
     # 200-700 steps/s of the ~950 the stirring scene needs; the cpu backend ~1000-2400).
