@@ -73,7 +73,7 @@ def test_a_clean_stop_leaves_no_shared_memory_or_sockets(stirring):
 
 
 # The bucket's level stretch judged: from 1 s of simulated time (the water has settled) to 1.6 s,
-# at least 200 steps at the scene's 3 ms maximum step.
+# at least 100 steps at the scene's 5 ms maximum step.
 LEVEL_FROM_S, LEVEL_UNTIL_S = 1.0, 1.6
 
 
@@ -81,7 +81,7 @@ def test_two_devices_on_one_bucket_share_its_weight(binary, tmp_path):
     # §6.4.4, fig. 11: both hands hold the bucket level for the first second; each carries a
     # share of the bucket's and the water's weight (neither holds it alone, neither pushes it up).
     # The sim (started after the devices and the loop) runs this scene at a real-time factor of
-    # ~0.3 here, less on a loaded machine: the hands hold level (a lead-in longer than any wait of
+    # ~0.75 here, less on a loaded machine: the hands hold level (a lead-in longer than any wait of
     # the harness) until the sim has simulated the level stretch, and the run stops there.
     stack = Stack(binary, tmp_path, rig="fake_dual.toml", tag="bucket", lead_in_s=WAIT_TIMEOUT_S + 20.0,
                   scene="bucket_bimanual")
@@ -102,7 +102,7 @@ def test_two_devices_on_one_bucket_share_its_weight(binary, tmp_path):
     first_tilt_ns = (min(stack.started_at["fake-left"], stack.started_at["fake-right"]) + stack.lead_in_s + 1.0) * 1e9
     rows = [r for r in read_csv(tmp_path / "sim" / "couplings.csv")
             if r["t"] > LEVEL_FROM_S and r["publish_ns"] < first_tilt_ns - 1e8]
-    assert len(rows) > 400, f"too short a level stretch to judge: {len(rows) // 2} steps"
+    assert len(rows) > 200, f"too short a level stretch to judge: {len(rows) // 2} steps"
     down = {d: -np.mean([r["fz"] for r in rows if r["device"] == d]) for d in ("left", "right")}
     total = down["left"] + down["right"]
     assert total > 1.0, f"the hands carry {total:.2f} N: the bucket's weight is missing"
