@@ -77,7 +77,7 @@ void DfsphFields::resize(std::size_t n) {
   for (auto* v : {&density_hat, &factor, &solid_gx, &solid_gy, &solid_gz, &stiffness_step,
                   &density_stiffness, &divergence_stiffness, &visc_bx, &visc_by, &visc_bz, &visc_inv_diag_x,
                   &visc_inv_diag_y, &visc_inv_diag_z, &cg_rx, &cg_ry, &cg_rz, &cg_px, &cg_py, &cg_pz, &cg_ax, &cg_ay,
-                  &cg_az})
+                  &cg_az, &visc_wall_x, &visc_wall_y, &visc_wall_z})
     v->assign(n, 0.0f);
   neighbours.assign(n, 0);
 }

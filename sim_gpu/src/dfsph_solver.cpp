@@ -294,7 +294,7 @@ int DfsphSolver::viscosity_solve(float dt) {
   // r = b - K v, p = M^-1 r; dots: r . p and b . b; and each worker's largest diagonal excess
   // sum_a (K_ii,aa - 1), for the bound on K's spectrum below.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-    detail::viscosity_rhs(m_.params, f, fluid_statics_, body_view_, lists_[w], ranges_.data(), b, e, dt, d);
+    detail::viscosity_rhs(m_.params, f, fluid_statics_, body_view_, walls_, lists_[w], ranges_.data(), b, e, dt, d);
     apply(f.vx.data(), f.vy.data(), f.vz.data(), d.cg_ax.data(), d.cg_ay.data(), d.cg_az.data(), b, e, w);
     double rz = 0, bb = 0;
     float excess = 0;

@@ -40,8 +40,8 @@ void solid_apply(const SortedSolids& s, const std::uint32_t* list, const float* 
 }  // namespace
 
 void viscosity_rhs(const SimulationParams& p, const FluidParticles& f, const SortedSolids& st, const SortedSolids& bv,
-                   const PairLists& lists, const PairRange* ranges, std::size_t begin, std::size_t end, float dt,
-                   DfsphFields& d) {
+                   const WallMap& walls, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                   std::size_t end, float dt, DfsphFields& d) {
   const PairTerms t = terms(p);
   const std::uint32_t* list = lists.index.data();
   const float *gx = lists.gx.data(), *gy = lists.gy.data(), *gz = lists.gz.data();
@@ -63,6 +63,11 @@ void viscosity_rhs(const SimulationParams& p, const FluidParticles& f, const Sor
                 dgy, dgz);
     const std::uint32_t ob = o + n + r.statics;
     solid_terms(bv, list + ob, gx + ob, gy + ob, gz + ob, r.bodies, xi, yi, zi, mui, t, dt, bx, by, bz, dgx, dgy, dgz);
+    float wx = 0, wy = 0, wz = 0;
+    walls.friction(xi, yi, zi, wx, wy, wz);
+    const float cw = dt * kLaplacianFactor * 0.5f * (mui + p.fluid_viscosity_pa_s) * t.inv_rho0;
+    d.visc_wall_x[i] = cw * wx, d.visc_wall_y[i] = cw * wy, d.visc_wall_z[i] = cw * wz;
+    dgx += d.visc_wall_x[i], dgy += d.visc_wall_y[i], dgz += d.visc_wall_z[i];
     d.visc_bx[i] = bx, d.visc_by[i] = by, d.visc_bz[i] = bz;
     d.visc_inv_diag_x[i] = 1.0f / dgx, d.visc_inv_diag_y[i] = 1.0f / dgy, d.visc_inv_diag_z[i] = 1.0f / dgz;
   }
@@ -94,7 +99,8 @@ void viscosity_apply(const SimulationParams& p, const FluidParticles& f, const S
                 ay, az);
     const std::uint32_t ob = o + n + r.statics;
     solid_apply(bv, list + ob, gx + ob, gy + ob, gz + ob, r.bodies, xi, yi, zi, vxi, vyi, vzi, mui, t, dt, ax, ay, az);
-    ox[i] = vxi - ax, oy[i] = vyi - ay, oz[i] = vzi - az;
+    ox[i] = vxi - ax + d.visc_wall_x[i] * vxi, oy[i] = vyi - ay + d.visc_wall_y[i] * vyi,
+    oz[i] = vzi - az + d.visc_wall_z[i] * vzi;
   }
 }
 

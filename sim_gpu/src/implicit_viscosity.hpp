@@ -6,14 +6,16 @@
 // c_ij = 2 (d + 2) mu_ij / rho0 times 2 / (rho_i + rho_j) / rho0 for fluid pairs (symmetric, so
 // the system is symmetric positive definite and conjugate gradients apply), mu_ij the mean of
 // both viscosities; solids (static and dynamic body particles) with their own viscosity and
-// known velocity move to the right-hand side. Passes over [begin, end) of the sorted fluid,
-// reading the step's pair lists; internal to sim_gpu.
+// known velocity move to the right-hand side; the domain walls, at rest and at the fluid's
+// viscosity, add to the diagonal alone (their friction integrals, wall_map.hpp). Passes over
+// [begin, end) of the sorted fluid, reading the step's pair lists; internal to sim_gpu.
 #pragma once
 
 #include <cstddef>
 
 #include "hapfluid/sim/dfsph_solver.hpp"
 #include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/wall_map.hpp"
 
 namespace hapfluid::sim::detail {
 
@@ -21,11 +23,11 @@ namespace hapfluid::sim::detail {
 // bodies' share of the viscous terms (dfsph_passes.hpp) must use the same.
 inline constexpr float kLaplacianFactor = 10.0f;
 
-// b = v* - dt sum_solids c (v_b . x) / d grad, and the Jacobi preconditioner (the inverse of the
-// system's diagonal, per component), into the viscosity fields.
+// b = v* - dt sum_solids c (v_b . x) / d grad, the walls' share of the diagonal, and the Jacobi
+// preconditioner (the inverse of the system's diagonal, per component), into the viscosity fields.
 void viscosity_rhs(const SimulationParams& p, const FluidParticles& f, const SortedSolids& statics,
-                   const SortedSolids& bodies, const PairLists& lists, const PairRange* ranges, std::size_t begin,
-                   std::size_t end, float dt, DfsphFields& d);
+                   const SortedSolids& bodies, const WallMap& walls, const PairLists& lists, const PairRange* ranges,
+                   std::size_t begin, std::size_t end, float dt, DfsphFields& d);
 
 // out = K v for the velocity field (vx, vy, vz) (3 arrays over the fluid); returns nothing.
 void viscosity_apply(const SimulationParams& p, const FluidParticles& f, const SortedSolids& statics,

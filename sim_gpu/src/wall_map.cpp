@@ -33,7 +33,74 @@ double half_space_share(double u, double h) {
   return sum * (h - u) / n;
 }
 
+constexpr double kNoSlipWeightMax = 1.5;
+
+// The friction integrals at distance u from the wall's surface (negative: inside), with the
+// pair gradient's normalisation g (grad W = g W'(r) x / r): for the points of the half-space
+// beyond u, int (-g W'(r) / r) / (r^2 + 0.01 h^2) x_a^2 dV, normal and one tangential axis.
+// Plane by plane: at depth t the plane contributes 2 pi int phi(r) rho drho times t^2 (normal)
+// or times rho^2 / 2 (a tangent: the mean of x^2 over the circle), r^2 = t^2 + rho^2 < h^2,
+// each weighted for no slip at the surface (below).
+void friction_integrals(double u, double h, double g, double& normal, double& tangent) {
+  normal = tangent = 0;
+  if (u >= h) return;
+  const double lo = std::max(u, -h), eps2 = 0.01 * h * h;
+  const int planes = 200, rings = 200;
+  const double dt = (h - lo) / planes;
+  for (int a = 0; a < planes; ++a) {
+    const double t = lo + (a + 0.5) * dt;
+    const double rho_max = std::sqrt(std::max(0.0, h * h - t * t));
+    // No slip at the wall's surface (Morris, Fox & Zhu 1997): the wall point at depth t - u
+    // behind it carries the fluid's velocity extrapolated through zero, -(t - u) / u v_i, so it
+    // weighs 1 + (t - u) / u = t / u, at most 1.5 (their bound, for a particle at the surface).
+    const double beta = u > 0 ? std::min(t / u, kNoSlipWeightMax) : kNoSlipWeightMax;
+    const double dr = rho_max / rings;
+    double n = 0, tg = 0;
+    for (int b = 0; b < rings; ++b) {
+      const double rho = (b + 0.5) * dr, r = std::sqrt(t * t + rho * rho);
+      const double phi = -g * cubic_dw_dr_d(r, h) / r / (r * r + eps2);
+      n += phi * rho;
+      tg += phi * rho * rho * rho / 2;
+    }
+    normal += beta * 2 * kPi * n * dr * t * t * dt;
+    tangent += beta * 2 * kPi * tg * dr * dt;
+  }
+}
+
+// The table entry for u (u = the distance from the face into the fluid plus the offset), NaN-safe:
+// a particle whose position went non-finite reads the first entry and the finite-state check
+// then names it.
+struct TableAt {
+  int i;
+  float f;
+};
+TableAt table_at(float u, float h, float du, int size) {
+  float t = (u + h) / du;
+  t = t > 0.0f ? t : 0.0f;
+  t = std::min(t, static_cast<float>(size - 1) - 1e-3f);
+  const int i = static_cast<int>(t);
+  return {i, t - static_cast<float>(i)};
+}
+
+float lerp(const std::vector<float>& table, TableAt a) { return table[a.i] + a.f * (table[a.i + 1] - table[a.i]); }
+
 }  // namespace
+
+void WallMap::friction(float x, float y, float z, float& fx, float& fy, float& fz) const {
+  const float p[3] = {x, y, z};
+  float out[3] = {0, 0, 0};
+  for (int w = 0; w < 6; ++w) {
+    if (!enabled[w]) continue;
+    const int axis = w / 2;
+    const float inward = (w % 2 == 0) ? 1.0f : -1.0f;
+    const float u = (p[axis] - face[w]) * inward + offset_m;
+    if (u >= h) continue;
+    const TableAt a = table_at(u, h, du, kTableSize);
+    const float normal = lerp(friction_normal, a), tangent = lerp(friction_tangent, a);
+    for (int k = 0; k < 3; ++k) out[k] += k == axis ? normal : tangent;
+  }
+  fx += out[0], fy += out[1], fz += out[2];
+}
 
 void WallMap::sample(float x, float y, float z, float& density_hat, float& gx, float& gy, float& gz) const {
   const float p[3] = {x, y, z};
@@ -48,16 +115,10 @@ void WallMap::sample(float x, float y, float z, float& density_hat, float& gx, f
     const float inward = (w % 2 == 0) ? 1.0f : -1.0f;  // the normal into the fluid
     const float u = (p[axis] - face[w]) * inward + offset_m;
     if (u >= h) continue;
-    // NaN-safe clamp: a particle whose position went non-finite must read the table's first
-    // entry, not an index cast from NaN; the finite-state check then names it.
-    float t = (u + h) / du;
-    t = t > 0.0f ? t : 0.0f;
-    t = std::min(t, static_cast<float>(kTableSize - 1) - 1e-3f);
-    const int i = static_cast<int>(t);
-    const float f = t - static_cast<float>(i);
-    share[n] = this->share[i] + f * (this->share[i + 1] - this->share[i]);
+    const TableAt a = table_at(u, h, du, kTableSize);
+    share[n] = lerp(this->share, a);
     // The share grows toward the wall: its gradient points out of the fluid, -inward.
-    grad[n] = -inward * (slope[i] + f * (slope[i + 1] - slope[i])) * gradient_scale;
+    grad[n] = -inward * lerp(slope, a) * gradient_scale;
     axis_of[n] = axis;
     ++n;
   }
@@ -119,6 +180,16 @@ WallMap make_wall_map(const float lo[3], const float hi[3], const bool low_wall[
   m.offset_m = static_cast<float>(u0 - 0.5 * s);
   // Gradient: the wall's must cancel the fluid's (a positive z-sum: the neighbours lie above).
   m.gradient_scale = static_cast<float>(fluid_gradient / plane_integral(u0, h));
+  // Friction, with the pair gradients' own normalisation (the lists' V_j grad W).
+  const double g = kernel.grad_scale / (48.0 / (kPi * h * h * h) / h);
+  m.friction_normal.resize(kTableSize);
+  m.friction_tangent.resize(kTableSize);
+  for (int k = 0; k < kTableSize; ++k) {
+    double normal = 0, tangent = 0;
+    friction_integrals(-h + k * m.du, h, g, normal, tangent);
+    m.friction_normal[k] = static_cast<float>(normal);
+    m.friction_tangent[k] = static_cast<float>(tangent);
+  }
   return m;
 }
 

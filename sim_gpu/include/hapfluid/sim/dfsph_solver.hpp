@@ -66,6 +66,7 @@ struct DfsphFields {
   // conjugate-gradient residual, search direction and its image.
   std::vector<float> visc_bx, visc_by, visc_bz, visc_inv_diag_x, visc_inv_diag_y, visc_inv_diag_z;
   std::vector<float> cg_rx, cg_ry, cg_rz, cg_px, cg_py, cg_pz, cg_ax, cg_ay, cg_az;
+  std::vector<float> visc_wall_x, visc_wall_y, visc_wall_z;  // the walls' share of the diagonal (WallMap::friction)
   std::vector<std::uint16_t> neighbours;
   void resize(std::size_t n);
 };

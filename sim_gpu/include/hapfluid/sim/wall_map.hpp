@@ -11,6 +11,16 @@
 // exactly the rest density, and the gradient is scaled so that its pair gradients and the wall's
 // cancel there, as they do in the bulk. Where walls meet, the share of the union of their
 // half-spaces is 1 - prod (1 - V_w) (WallMap::sample).
+//
+// The walls also take part in the implicit viscosity, as the wall particles of the weakly
+// compressible solver do (no-slip, at the fluid's viscosity): the SPH Laplacian's solid term
+// sum_b V_b ((v_i - v_b) . x_ib) / (|x_ib|^2 + 0.01 h^2) grad W_ib, with the wall a continuum
+// at rest, is the integral over the half-space of (-W'(r) / r) / (r^2 + 0.01 h^2) x x^T, times
+// -v_i: diagonal in the wall's frame, one value for the normal and one for the tangents
+// (WallMap::friction). The wall's points carry the fluid's velocity extrapolated through zero at
+// the surface (Morris et al. 1997), so the fluid sticks at the surface rather than somewhere
+// inside the wall. Without it a volume-mapped wall is free-slip: a viscous fluid slides along
+// the floor as on ice.
 #pragma once
 
 #include <vector>
@@ -28,6 +38,8 @@ struct WallMap {
   // Tables over u = d + offset in [-h, h] (d the distance from the face into the fluid):
   // share of density (rho / rho0) and the magnitude of its gradient, 1/m.
   std::vector<float> share, slope;
+  // The friction integrals over the same u, 1/m^2: x_n^2 (normal) and x_t^2 (one tangent).
+  std::vector<float> friction_normal, friction_tangent;
   float du = 0;
 
   bool any() const {
@@ -37,6 +49,9 @@ struct WallMap {
   }
   // Adds the walls' density share and its gradient (pointing into the walls) at a position.
   void sample(float x, float y, float z, float& density_hat, float& gx, float& gy, float& gz) const;
+  // Adds the walls' friction integrals per axis at a position (each wall within reach: its
+  // normal integral on its own axis, the tangential one on the other two), 1/m^2.
+  void friction(float x, float y, float z, float& fx, float& fy, float& fz) const;
 };
 
 // The map of the enabled walls of a box, for the cubic kernel and fluid lattice spacing given.
