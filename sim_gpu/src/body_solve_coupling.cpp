@@ -78,7 +78,7 @@ void BodySolveCoupling::begin_step(const SimulationModel& m,
       for (std::uint32_t q = first; q < last; ++q) {
         const std::uint32_t p = l.index[q];
         const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
-        add_wrench(j6 + 6 * b, bodies, p, &com_[3 * b], l.gx[q], l.gy[q], l.gz[q]);
+        add_wrench(j6 + 6 * b, bodies, p, &com_[3 * b], l.term[q].x, l.term[q].y, l.term[q].z);
       }
       const double factor = fields.factor[i];
       for (std::uint32_t q = first; q < last; ++q) {
@@ -138,7 +138,8 @@ void BodySolveCoupling::add_forces(int worker, const SortedSolids& bodies, const
     for (std::uint32_t q = first; q < last; ++q) {
       const std::uint32_t p = lists.index[q];
       const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
-      add_wrench(acc + 6 * b, bodies, p, &com_[3 * b], mk * lists.gx[q], mk * lists.gy[q], mk * lists.gz[q]);
+      const Packed4& g = lists.term[q];
+      add_wrench(acc + 6 * b, bodies, p, &com_[3 * b], mk * g.x, mk * g.y, mk * g.z);
     }
   }
 }

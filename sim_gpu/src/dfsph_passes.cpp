@@ -6,31 +6,26 @@
 #include "hapfluid/sim/cubic_kernel.hpp"
 #include "hapfluid/sim/neighbour_grid.hpp"
 #include "implicit_viscosity.hpp"
+#include "neighbour_filter.hpp"
+#include "simd.hpp"
 
 namespace hapfluid::sim::detail {
 namespace {
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
-#define HAPFLUID_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define HAPFLUID_CLONES
-#endif
-
-// Appends the candidates of the cells around (xi, yi, zi) that lie within h: each run of cells
-// is copied branch-free (the index is always written, the cursor advances only for a neighbour),
-// which vectorises. Returns how many were appended.
-std::uint32_t collect(const GridGeometry& g, const std::uint32_t* cell_start, const float* x, const float* y,
-                      const float* z, float xi, float yi, float zi, float h2, PairLists& lists) {
+// Appends the candidates of the cells around (xi, yi, zi) that lie within h to the worker's lists,
+// their offsets x_i - x_j to its scratch from `first` on (neighbour_filter.hpp). Returns how many.
+std::uint32_t collect(FilterFn filter, const GridGeometry& g, const std::uint32_t* cell_start, const float* x,
+                      const float* y, const float* z, float xi, float yi, float zi, float h2, std::uint32_t first,
+                      PairLists& lists) {
   std::uint32_t count = 0;
   for_each_neighbour_run(g, cell_start, xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-    if (lists.used + (e - b) > lists.index.size()) lists.reserve(2 * (lists.used + (e - b)) + 4096);
-    std::uint32_t* out = lists.index.data() + lists.used;
-    std::uint32_t n = 0;
-    for (std::uint32_t j = b; j < e; ++j) {
-      const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
-      out[n] = j;
-      n += (dx * dx + dy * dy + dz * dz < h2) ? 1u : 0u;
-    }
+    const std::size_t room = (e - b) + kFilterSlack;
+    if (lists.used + room > lists.index.size()) lists.reserve(2 * (lists.used + room) + 4096);
+    if (first + count + room > lists.scratch_dx.size()) lists.reserve_scratch(2 * (first + count + room));
+    const std::uint32_t at = first + count;
+    const std::uint32_t n = filter(x, y, z, b, e, xi, yi, zi, h2,
+                                   {lists.index.data() + lists.used, lists.scratch_dx.data() + at,
+                                    lists.scratch_dy.data() + at, lists.scratch_dz.data() + at});
     lists.used += n;
     count += n;
   });
@@ -38,39 +33,60 @@ std::uint32_t collect(const GridGeometry& g, const std::uint32_t* cell_start, co
 }
 
 struct Sums {
-  float w = 0, gx = 0, gy = 0, gz = 0, g2 = 0;
+  V4 g = splat(0);  // x y z: the sum of the pair gradients; w: the sum of the kernel values
+  float g2 = 0;     // the sum of the gradients' squares
 };
 
-// Kernel values and gradients of n listed pairs, scaled by the neighbour's volume (one volume
-// for all fluid particles, Psi_b for solids); returns their sums.
-template <bool kPerParticleVolume>
-inline Sums pair_kernels(const float* x, const float* y, const float* z, const float* volume, float fluid_volume,
-                         const std::uint32_t* list, std::uint32_t n, float xi, float yi, float zi, const CubicKernel& k,
-                         float* gx, float* gy, float* gz, float* w) {
-  float sw = 0, sx = 0, sy = 0, sz = 0, s2 = 0;
-#pragma omp simd reduction(+ : sw, sx, sy, sz, s2)
-  for (std::uint32_t q = 0; q < n; ++q) {
-    const std::uint32_t j = list[q];
-    const float dx = xi - x[j], dy = yi - y[j], dz = zi - z[j];
+// The unit-volume kernel values and gradients of the n collected pairs, in place of their offsets
+// in the scratch (w into scratch_w). Padded to a whole number of 8-wide vectors with pairs beyond
+// the support (offset h: W = 0, grad W = 0), so the loop of selects vectorises with no remainder.
+HAPFLUID_CLONES
+void unit_kernels(PairLists& lists, std::uint32_t n, const CubicKernel& k) {
+  float *dxs = lists.scratch_dx.data(), *dys = lists.scratch_dy.data(), *dzs = lists.scratch_dz.data();
+  float* ws = lists.scratch_w.data();
+  const std::uint32_t padded = (n + 7) & ~7u;
+  for (std::uint32_t q = n; q < padded; ++q) dxs[q] = k.h, dys[q] = 0, dzs[q] = 0;
+#pragma omp simd
+  for (std::uint32_t q = 0; q < padded; ++q) {
+    const float dx = dxs[q], dy = dys[q], dz = dzs[q];
     const float r = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const float v = kPerParticleVolume ? volume[j] : fluid_volume;
-    const float wq = v * cubic_w(k, r);
-    const float g = v * cubic_grad_over_r(k, r);
-    const float ax = g * dx, ay = g * dy, az = g * dz;
-    gx[q] = ax, gy[q] = ay, gz[q] = az, w[q] = wq;
-    sw += wq, sx += ax, sy += ay, sz += az, s2 += ax * ax + ay * ay + az * az;
+    const float g = cubic_grad_over_r(k, r);
+    ws[q] = cubic_w(k, r);
+    dxs[q] = g * dx, dys[q] = g * dy, dzs[q] = g * dz;
   }
-  return {sw, sx, sy, sz, s2};
+}
+
+// Packs the unit terms of the pairs [first, first + n) of the scratch, scaled by the neighbour's
+// volume (one volume for all fluid particles, Psi_b for solids), into their terms; returns sums.
+template <bool kPerParticleVolume>
+inline Sums pack_terms(const PairLists& lists, std::uint32_t first, std::uint32_t n, const float* volume,
+                       float fluid_volume, const std::uint32_t* list, Packed4* term) {
+  const float *dxs = lists.scratch_dx.data(), *dys = lists.scratch_dy.data(), *dzs = lists.scratch_dz.data();
+  const float* ws = lists.scratch_w.data();
+  Sums s;
+  for (std::uint32_t q = 0; q < n; ++q) {
+    const std::uint32_t u = first + q;
+    const V4 t = splat(kPerParticleVolume ? volume[list[q]] : fluid_volume) * V4{dxs[u], dys[u], dzs[u], ws[u]};
+    store(term[q], t);
+    s.g += t;
+    s.g2 += dot3(t, t);
+  }
+  return s;
 }
 
 inline std::uint16_t clamp16(std::uint32_t n) { return static_cast<std::uint16_t>(std::min<std::uint32_t>(n, 65535)); }
 
 }  // namespace
 
+void PairLists::reserve_scratch(std::size_t n) {
+  if (n <= scratch_dx.size()) return;
+  scratch_dx.resize(n), scratch_dy.resize(n), scratch_dz.resize(n), scratch_w.resize(n);
+}
+
 void PairLists::reserve(std::size_t n) {
   if (n <= index.size()) return;
   index.resize(n);
-  gx.resize(n), gy.resize(n), gz.resize(n), w.resize(n);
+  term.resize(n);
 }
 
 void DfsphFields::resize(std::size_t n) {
@@ -79,6 +95,8 @@ void DfsphFields::resize(std::size_t n) {
                   &visc_inv_diag_y, &visc_inv_diag_z, &cg_rx, &cg_ry, &cg_rz, &cg_px, &cg_py, &cg_pz, &cg_ax, &cg_ay,
                   &cg_az, &visc_wall_x, &visc_wall_y, &visc_wall_z})
     v->assign(n, 0.0f);
+  position.assign(n, Packed4{});
+  velocity.assign(n, Packed4{});
   neighbours.assign(n, 0);
 }
 
@@ -97,30 +115,32 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
     const float xi = f.x[i], yi = f.y[i], zi = f.z[i];
     PairRange& r = ranges[i];
     r.offset = static_cast<std::uint32_t>(lists.used);
-    const std::uint32_t nf = collect(p.grid, fluid_cell_start, f.x.data(), f.y.data(), f.z.data(), xi, yi, zi, h2, lists);
-    const std::uint32_t ns =
-        st.size() > 0 ? collect(p.grid, st.cell_start.data(), st.x.data(), st.y.data(), st.z.data(), xi, yi, zi, h2, lists) : 0;
-    const std::uint32_t nb =
-        bv.size() > 0 ? collect(p.grid, bv.cell_start.data(), bv.x.data(), bv.y.data(), bv.z.data(), xi, yi, zi, h2, lists) : 0;
+    const FilterFn filter = neighbour_filter();
+    const std::uint32_t nf =
+        collect(filter, p.grid, fluid_cell_start, f.x.data(), f.y.data(), f.z.data(), xi, yi, zi, h2, 0, lists);
+    const std::uint32_t ns = st.size() > 0 ? collect(filter, p.grid, st.cell_start.data(), st.x.data(), st.y.data(),
+                                                     st.z.data(), xi, yi, zi, h2, nf, lists)
+                                           : 0;
+    const std::uint32_t nb = bv.size() > 0 ? collect(filter, p.grid, bv.cell_start.data(), bv.x.data(), bv.y.data(),
+                                                     bv.z.data(), xi, yi, zi, h2, nf + ns, lists)
+                                           : 0;
     r.fluid = clamp16(nf), r.statics = clamp16(ns), r.bodies = clamp16(nb);
     const std::uint32_t o = r.offset;
     const std::uint32_t* list = lists.index.data();
-    float *gx = lists.gx.data(), *gy = lists.gy.data(), *gz = lists.gz.data(), *w = lists.w.data();
-    const Sums sf = pair_kernels<false>(f.x.data(), f.y.data(), f.z.data(), nullptr, fluid_volume, list + o, nf, xi, yi, zi,
-                                        k, gx + o, gy + o, gz + o, w + o);
-    const Sums ss = pair_kernels<true>(st.x.data(), st.y.data(), st.z.data(), st.volume.data(), 0, list + o + nf, ns, xi, yi,
-                                       zi, k, gx + o + nf, gy + o + nf, gz + o + nf, w + o + nf);
+    Packed4* term = lists.term.data();
+    unit_kernels(lists, nf + ns + nb, k);
+    const Sums sf = pack_terms<false>(lists, 0, nf, nullptr, fluid_volume, list + o, term + o);
+    const Sums ss = pack_terms<true>(lists, nf, ns, st.volume.data(), 0, list + o + nf, term + o + nf);
     const std::uint32_t ob = o + nf + ns;
-    const Sums sb = pair_kernels<true>(bv.x.data(), bv.y.data(), bv.z.data(), bv.volume.data(), 0, list + ob, nb, xi, yi, zi,
-                                       k, gx + ob, gy + ob, gz + ob, w + ob);
+    const Sums sb = pack_terms<true>(lists, nf + ns, nb, bv.volume.data(), 0, list + ob, term + ob);
     float wall_share = 0, wx = 0, wy = 0, wz = 0;
     walls.sample(xi, yi, zi, wall_share, wx, wy, wz);
-    out.density_hat[i] = sf.w + ss.w + sb.w + wall_share;
+    out.density_hat[i] = sf.g[3] + ss.g[3] + sb.g[3] + wall_share;
     // The density response to the particle's own stiffness k: it moves by -dt^2 k T (T the sum of
     // all its pair gradients, solids and walls included) and pushes each fluid neighbour by
     // dt^2 k g_ij, so d(rho/rho0) = -dt^2 k (|T|^2 + sum_fluid |g_ij|^2).
-    const float sx = ss.gx + sb.gx + wx, sy = ss.gy + sb.gy + wy, sz = ss.gz + sb.gz + wz;
-    const float tx = sf.gx + sx, ty = sf.gy + sy, tz = sf.gz + sz;
+    const float sx = ss.g[0] + sb.g[0] + wx, sy = ss.g[1] + sb.g[1] + wy, sz = ss.g[2] + sb.g[2] + wz;
+    const float tx = sf.g[0] + sx, ty = sf.g[1] + sy, tz = sf.g[2] + sz;
     const float denominator = tx * tx + ty * ty + tz * tz + sf.g2;
     out.factor[i] = denominator > tiny ? 1.0f / denominator : 0.0f;
     out.solid_gx[i] = sx, out.solid_gy[i] = sy, out.solid_gz[i] = sz;
@@ -129,51 +149,43 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
 }
 
 HAPFLUID_CLONES
-void density_rate(const FluidParticles& f, const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists,
-                  const PairRange* ranges, std::size_t begin, std::size_t end, float* rate) {
-  const float *vx = f.vx.data(), *vy = f.vy.data(), *vz = f.vz.data();
+void density_rate(const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
+                  std::size_t begin, std::size_t end, float* rate) {
+  const Packed4* v = d.velocity.data();
   const float *bx = bodies.vx.data(), *by = bodies.vy.data(), *bz = bodies.vz.data();
   const std::uint32_t* list = lists.index.data();
-  const float *gx = lists.gx.data(), *gy = lists.gy.data(), *gz = lists.gz.data();
+  const Packed4* term = lists.term.data();
   for (std::size_t i = begin; i < end; ++i) {
     const PairRange& r = ranges[i];
-    const float vxi = vx[i], vyi = vy[i], vzi = vz[i];
-    float s = 0;
+    const V4 vi = load(v[i]);
+    V4 s = splat(0);
     const std::uint32_t o = r.offset, n = r.fluid;
-#pragma omp simd reduction(+ : s)
-    for (std::uint32_t q = o; q < o + n; ++q) {
-      const std::uint32_t j = list[q];
-      s += gx[q] * (vxi - vx[j]) + gy[q] * (vyi - vy[j]) + gz[q] * (vzi - vz[j]);
-    }
+    for (std::uint32_t q = o; q < o + n; ++q) s += load(term[q]) * (vi - load(v[list[q]]));
     // The body particles' flux, from their velocities now: a solve coupled to the bodies moves them.
     float flux = 0;
     for (std::uint32_t q = o + n + r.statics; q < o + n + r.statics + r.bodies; ++q) {
       const std::uint32_t j = list[q];
-      flux += gx[q] * bx[j] + gy[q] * by[j] + gz[q] * bz[j];
+      flux += term[q].x * bx[j] + term[q].y * by[j] + term[q].z * bz[j];
     }
-    rate[i] = s + vxi * d.solid_gx[i] + vyi * d.solid_gy[i] + vzi * d.solid_gz[i] - flux;
+    rate[i] = s[0] + s[1] + s[2] + dot3(vi, V4{d.solid_gx[i], d.solid_gy[i], d.solid_gz[i], 0.0f}) - flux;
   }
 }
 
 HAPFLUID_CLONES
-void apply_stiffness(FluidParticles& f, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                     std::size_t begin, std::size_t end, float dt) {
+void apply_stiffness(DfsphFields& d, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                     std::size_t end, float dt) {
   const float* k = d.stiffness_step.data();
   const std::uint32_t* list = lists.index.data();
-  const float *gx = lists.gx.data(), *gy = lists.gy.data(), *gz = lists.gz.data();
+  const Packed4* term = lists.term.data();
+  Packed4* v = d.velocity.data();
   for (std::size_t i = begin; i < end; ++i) {
     const PairRange& r = ranges[i];
     const float ki = k[i];
-    float ax = 0, ay = 0, az = 0;
+    V4 a = splat(ki) * V4{d.solid_gx[i], d.solid_gy[i], d.solid_gz[i], 0.0f};
     const std::uint32_t o = r.offset, n = r.fluid;
-#pragma omp simd reduction(+ : ax, ay, az)
-    for (std::uint32_t q = o; q < o + n; ++q) {
-      const float kij = ki + k[list[q]];
-      ax += kij * gx[q], ay += kij * gy[q], az += kij * gz[q];
-    }
-    f.vx[i] -= dt * (ax + ki * d.solid_gx[i]);
-    f.vy[i] -= dt * (ay + ki * d.solid_gy[i]);
-    f.vz[i] -= dt * (az + ki * d.solid_gz[i]);
+    for (std::uint32_t q = o; q < o + n; ++q) a += splat(ki + k[list[q]]) * load(term[q]);
+    a[3] = 0.0f;
+    store(v[i], load(v[i]) - splat(dt) * a);
   }
 }
 
@@ -187,17 +199,16 @@ void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, co
   const float *vx = f.vx.data(), *vy = f.vy.data(), *vz = f.vz.data();
   const float* rho = d.density_hat.data();
   const std::uint32_t* list = lists.index.data();
-  const float* w = lists.w.data();
+  const Packed4* term = lists.term.data();
   for (std::size_t i = begin; i < end; ++i) {
     const PairRange& r = ranges[i];
     const float vxi = vx[i], vyi = vy[i], vzi = vz[i];
     float sx = 0, sy = 0, sz = 0;
     const std::uint32_t o = r.offset, n = r.fluid;
     if (xsph > 0) {
-#pragma omp simd reduction(+ : sx, sy, sz)
       for (std::uint32_t q = o; q < o + n; ++q) {
         const std::uint32_t j = list[q];
-        const float ws = w[q] / rho[j];
+        const float ws = term[q].w / rho[j];
         sx -= ws * (vxi - vx[j]), sy -= ws * (vyi - vy[j]), sz -= ws * (vzi - vz[j]);
       }
     }

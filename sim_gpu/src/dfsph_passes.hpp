@@ -21,13 +21,15 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
 
 // rate[i] = D(rho/rho0)/Dt = sum_j V_j grad W_ij . (v_i - v_j) over fluid and solid neighbours,
 // 1/s; the dynamic bodies' particles with their velocities in `bodies` (static solids are at rest).
-void density_rate(const FluidParticles& f, const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists,
-                  const PairRange* ranges, std::size_t begin, std::size_t end, float* rate);
+// The fluid's velocities are d.velocity (packed for the solve).
+void density_rate(const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
+                  std::size_t begin, std::size_t end, float* rate);
 
 // v_i -= dt (sum_fluid (k_i + k_j) V_j grad W_ij + k_i sum_solids Psi_b grad W_ib), k = the
 // stiffness increments of this iteration.
-void apply_stiffness(FluidParticles& f, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                     std::size_t begin, std::size_t end, float dt);
+// On d.velocity.
+void apply_stiffness(DfsphFields& d, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                     std::size_t end, float dt);
 
 // Gravity and XSPH (as an acceleration over dt) into ax, ay, az; viscosity is implicit
 // (implicit_viscosity.hpp).

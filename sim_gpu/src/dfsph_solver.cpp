@@ -53,6 +53,7 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads)
     std::size_t b, e;
     ThreadPool::chunk(m_.fluid.size(), threads, w, b, e);
     lists_[w].reserve((e - b) * per_particle + 4096);
+    lists_[w].reserve_scratch(4096);
   }
   ranges_.resize(m_.fluid.size());
   fields_.resize(m_.fluid.size());
@@ -148,6 +149,7 @@ void DfsphSolver::sort_and_build_pairs() {
     body_view_.cell_start.clear();
   }
   pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int w) {
+    for (std::size_t i = b; i < e; ++i) fields_.position[i] = {f.x[i], f.y[i], f.z[i], f.viscosity[i]};
     detail::build_pairs(m_.params, f, fluid_sort_.cell_start.data(), fluid_statics_, body_view_, walls_, b, e, lists_[w],
                         ranges_.data(), fields_);
   });
@@ -169,9 +171,14 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
   const float warm_scale = density ? 1.0f / (dt * dt) : 1.0f / dt;
   const float inv_dt2 = 1.0f / (dt * dt);
   float* step = fields_.stiffness_step.data();
+  detail::Packed4* velocity = fields_.velocity.data();
   // Warm start: where the particle is compressed now, start from part of last step's stiffness.
+  // The solve works on packed velocities (simd.hpp), unpacked at its end.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-    detail::density_rate(f, body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
+    for (std::size_t i = b; i < e; ++i) velocity[i] = {f.vx[i], f.vy[i], f.vz[i], 0.0f};
+  });
+  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
+    detail::density_rate(body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
     for (std::size_t i = b; i < e; ++i) {
       const float k = rate(i, step[i]) > 0 ? kWarmStartFraction * warm[i] * warm_scale : 0.0f;
       step[i] = k;
@@ -180,7 +187,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
   });
   auto apply = [&] {
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-      detail::apply_stiffness(f, fields_, lists_[w], ranges_.data(), b, e, dt);
+      detail::apply_stiffness(fields_, lists_[w], ranges_.data(), b, e, dt);
       if (coupled_) coupling_->add_forces(w, body_view_, lists_[w], ranges_.data(), b, e, step);
     });
     if (coupled_) coupling_->update_velocities(m_, body_view_, pool_);
@@ -190,7 +197,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
   double mean_error = 0;
   for (; it < ip.max_iterations; ++it) {
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-      detail::density_rate(f, body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
+      detail::density_rate(body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
       double sum = 0;
       for (std::size_t i = b; i < e; ++i) {
         const float error = rate(i, step[i]);
@@ -213,6 +220,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
     for (std::size_t i = b; i < e; ++i) {
       if (it < ip.max_iterations) total[i] -= step[i];
       warm[i] = total[i] * scale;
+      f.vx[i] = velocity[i].x, f.vy[i] = velocity[i].y, f.vz[i] = velocity[i].z;
     }
   });
   if (it >= ip.max_iterations) ++iterations_.unconverged_solves;
@@ -249,10 +257,15 @@ void DfsphSolver::non_pressure_forces(float dt) {
   FluidParticles& f = m_.fluid;
   pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int w) {
     detail::non_pressure_accelerations(m_.params, f, fields_, lists_[w], ranges_.data(), b, e, dt);
+  });
+  // Apart from the pass above: XSPH reads the neighbours' velocities of before the update. The
+  // viscosity solve starts from the packed result.
+  pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int) {
     for (std::size_t i = b; i < e; ++i) {
       f.vx[i] += dt * f.ax[i];
       f.vy[i] += dt * f.ay[i];
       f.vz[i] += dt * f.az[i];
+      fields_.velocity[i] = {f.vx[i], f.vy[i], f.vz[i], fields_.density_hat[i]};
     }
   });
   iterations_.viscosity_iterations += static_cast<std::uint64_t>(viscosity_solve(dt));
@@ -288,14 +301,13 @@ int DfsphSolver::viscosity_solve(float dt) {
   };
   auto apply = [&](const float* x, const float* y, const float* z, float* ox, float* oy, float* oz, std::size_t b,
                    std::size_t e, int w) {
-    detail::viscosity_apply(m_.params, f, fluid_statics_, body_view_, d, lists_[w], ranges_.data(), b, e, dt, x, y, z,
-                            ox, oy, oz);
+    detail::viscosity_apply(m_.params, fluid_statics_, body_view_, d, lists_[w], ranges_.data(), b, e, dt, x, y, z, ox,
+                            oy, oz);
   };
   // r = b - K v, p = M^-1 r; dots: r . p and b . b; and each worker's largest diagonal excess
   // sum_a (K_ii,aa - 1), for the bound on K's spectrum below.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-    detail::viscosity_rhs(m_.params, f, fluid_statics_, body_view_, walls_, lists_[w], ranges_.data(), b, e, dt, d);
-    apply(f.vx.data(), f.vy.data(), f.vz.data(), d.cg_ax.data(), d.cg_ay.data(), d.cg_az.data(), b, e, w);
+    detail::viscosity_rhs(m_.params, fluid_statics_, body_view_, walls_, lists_[w], ranges_.data(), b, e, dt, d);
     double rz = 0, bb = 0;
     float excess = 0;
     for (std::size_t i = b; i < e; ++i) {

@@ -23,16 +23,18 @@ namespace hapfluid::sim::detail {
 // bodies' share of the viscous terms (dfsph_passes.hpp) must use the same.
 inline constexpr float kLaplacianFactor = 10.0f;
 
-// b = v* - dt sum_solids c (v_b . x) / d grad, the walls' share of the diagonal, and the Jacobi
-// preconditioner (the inverse of the system's diagonal, per component), into the viscosity fields.
-void viscosity_rhs(const SimulationParams& p, const FluidParticles& f, const SortedSolids& statics,
-                   const SortedSolids& bodies, const WallMap& walls, const PairLists& lists, const PairRange* ranges,
-                   std::size_t begin, std::size_t end, float dt, DfsphFields& d);
+// The first pass of a solve, on the velocities v* in d.velocity (w: rho / rho0) and the positions in
+// d.position (w: the particle's viscosity): b = v* - dt sum_solids c (v_b . x) / d grad, the walls'
+// share of the diagonal, the Jacobi preconditioner (the inverse of the system's diagonal, per
+// component) into the viscosity fields, and K v* into cg_ax, cg_ay, cg_az.
+void viscosity_rhs(const SimulationParams& p, const SortedSolids& statics, const SortedSolids& bodies,
+                   const WallMap& walls, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                   std::size_t end, float dt, DfsphFields& d);
 
-// out = K v for the velocity field (vx, vy, vz) (3 arrays over the fluid); returns nothing.
-void viscosity_apply(const SimulationParams& p, const FluidParticles& f, const SortedSolids& statics,
-                     const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                     std::size_t begin, std::size_t end, float dt, const float* vx, const float* vy, const float* vz,
-                     float* ox, float* oy, float* oz);
+// out = K v for the velocity field (vx, vy, vz) (3 arrays over the fluid).
+void viscosity_apply(const SimulationParams& p, const SortedSolids& statics, const SortedSolids& bodies,
+                     const DfsphFields& d, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                     std::size_t end, float dt, const float* vx, const float* vy, const float* vz, float* ox, float* oy,
+                     float* oz);
 
 }  // namespace hapfluid::sim::detail

@@ -4,15 +4,10 @@
 #include <cmath>
 
 #include "hapfluid/sim/gradient_correction.hpp"
+#include "simd.hpp"
 
 namespace hapfluid::sim::detail {
 namespace {
-
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__SANITIZE_THREAD__)
-#define HAPFLUID_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define HAPFLUID_CLONES
-#endif
 
 // Appends the candidates of one run that lie within h (branch-free compaction) and returns
 // how many were appended. The buffer has room for the whole run.

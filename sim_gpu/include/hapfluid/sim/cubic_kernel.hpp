@@ -43,9 +43,10 @@ inline float cubic_w(const CubicKernel& k, float r) {
 inline float cubic_grad_over_r(const CubicKernel& k, float r) {
   const float q = r * k.inv_h;
   const float a = 1.0f - q > 0.0f ? 1.0f - q : 0.0f;
-  // q <= 1/2: q (3q - 2) / r = (3q - 2) / h; beyond: -(1 - q)^2 / r.
+  // q <= 1/2: q (3q - 2) / r = (3q - 2) / h; beyond: -(1 - q)^2 / r. The divisor is a select (r
+  // = 0 takes the inner piece) so that the whole function if-converts and vectorises.
   const float inner = (3.0f * q - 2.0f) * k.inv_h;
-  const float outer = r > 0.0f ? -a * a / r : 0.0f;
+  const float outer = -a * a / (r > 0.0f ? r : 1.0f);
   return k.grad_scale * (q <= 0.5f ? inner : outer);
 }
 

@@ -40,14 +40,24 @@ namespace hapfluid::sim {
 
 namespace detail {
 
+// Four floats in one 16-byte register: a pair's terms or a particle's velocity. A pass over the
+// pairs then reads a neighbour's whole vector with one load instead of three gathered scalars.
+struct alignas(16) Packed4 {
+  float x = 0, y = 0, z = 0, w = 0;
+};
+
 // Pairs of the fluid particles of one worker: fluid neighbours, then static solid, then dynamic
 // body neighbours of each particle.
 struct PairLists {
   std::vector<std::uint32_t> index;
-  std::vector<float> gx, gy, gz;  // V_j grad W(x_i - x_j), 1/m (V_j = m / rho0, or Psi_b)
-  std::vector<float> w;           // V_j W(x_i - x_j)
+  // x, y, z: V_j grad W(x_i - x_j), 1/m (V_j = m / rho0, or Psi_b); w: V_j W(x_i - x_j).
+  std::vector<Packed4> term;
   std::size_t used = 0;
+  // The offsets x_i - x_j of the particle being listed, from the candidate filter to its kernels
+  // (which leave their terms there before packing them).
+  std::vector<float> scratch_dx, scratch_dy, scratch_dz, scratch_w;
   void reserve(std::size_t n);
+  void reserve_scratch(std::size_t n);
 };
 
 struct PairRange {
@@ -61,6 +71,9 @@ struct DfsphFields {
   std::vector<float> factor;             // DFSPH factor, m^2
   std::vector<float> solid_gx, solid_gy, solid_gz;  // sum over solids of Psi_b grad W_ib, 1/m
   std::vector<float> stiffness_step;     // this iteration's stiffness increment, m^2/s^2
+  // Packed copies for the pair passes: the sorted positions (w: the particle's viscosity, Pa s) and
+  // the velocities during a solve (w: rho / rho0 in the viscosity solve, else unused), m and m/s.
+  std::vector<Packed4> position, velocity;
   std::vector<float> density_stiffness, divergence_stiffness;  // this step's totals, m^2/s^2
   // Implicit viscosity (implicit_viscosity.hpp): right-hand side, inverse diagonal, and the
   // conjugate-gradient residual, search direction and its image.
