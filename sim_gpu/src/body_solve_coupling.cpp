@@ -37,8 +37,8 @@ Vec6 times(const Mat6& a, const Vec6& v) {
 
 }  // namespace
 
-void BodySolveCoupling::init(const SimulationModel& m, int workers) {
-  workers_ = workers;
+void BodySolveCoupling::init(const SimulationModel& m, int slots) {
+  slots_ = slots;
   bodies_ = m.bodies.size();
   particle_mass_ = m.params.fluid_particle_mass_kg;
   dynamic_.assign(bodies_, 0);
@@ -50,9 +50,9 @@ void BodySolveCoupling::init(const SimulationModel& m, int workers) {
   u_.assign(bodies_, Vec6{});
   force_.assign(bodies_, Vec6{});
   com_.assign(3 * bodies_, 0.0f);
-  worker_force_.assign(6 * bodies_ * workers, 0.0);
-  worker_response_.assign(36 * bodies_ * workers, 0.0);
-  worker_j_.assign(6 * bodies_ * workers, 0.0);
+  slot_force_.assign(6 * bodies_ * slots, 0.0);
+  slot_response_.assign(36 * bodies_ * slots, 0.0);
+  slot_j_.assign(6 * bodies_ * slots, 0.0);
 }
 
 void BodySolveCoupling::begin_step(const SimulationModel& m,
@@ -66,11 +66,11 @@ void BodySolveCoupling::begin_step(const SimulationModel& m,
     com_[3 * b] = static_cast<float>(c.x), com_[3 * b + 1] = static_cast<float>(c.y), com_[3 * b + 2] = static_cast<float>(c.z);
   }
   // sum_i factor_i J_i J_i^T per body; J_i from particle i's pairs with that body's particles.
-  std::fill(worker_response_.begin(), worker_response_.end(), 0.0);
+  std::fill(slot_response_.begin(), slot_response_.end(), 0.0);
   pool.parallel_for(m.fluid.size(), [&](std::size_t begin, std::size_t end, int w) {
     const PairLists& l = lists[w];
-    double* j6 = worker_j_.data() + 6 * bodies_ * w;
-    double* s36 = worker_response_.data() + 36 * bodies_ * w;
+    double* j6 = slot_j_.data() + 6 * bodies_ * w;
+    double* s36 = slot_response_.data() + 36 * bodies_ * w;
     for (std::size_t i = begin; i < end; ++i) {
       const PairRange& r = ranges[i];
       if (r.bodies == 0) continue;
@@ -97,8 +97,8 @@ void BodySolveCoupling::begin_step(const SimulationModel& m,
     const BodySystem sys = body_system(m.bodies[b], couplings_of_body[b], devices, m.params.gravity_m_s2, dt);
     const Mat6 a_inv = inverse6(sys.a);
     Mat6 s{};
-    for (int w = 0; w < workers_; ++w)
-      for (int k = 0; k < 36; ++k) s[k] += worker_response_[36 * (bodies_ * w + b) + k];
+    for (int w = 0; w < slots_; ++w)
+      for (int k = 0; k < 36; ++k) s[k] += slot_response_[36 * (bodies_ * w + b) + k];
     double i_plus_l[6][6];
     for (int r = 0; r < 6; ++r)
       for (int c = 0; c < 6; ++c) {
@@ -124,12 +124,12 @@ void BodySolveCoupling::start_solve_from_body_states(const SimulationModel& m) {
     const Vec3 &v = body.linear_velocity, &w = body.angular_velocity;
     start_solve(b, Vec6{v.x, v.y, v.z, w.x, w.y, w.z});
   }
-  std::fill(worker_force_.begin(), worker_force_.end(), 0.0);
+  std::fill(slot_force_.begin(), slot_force_.end(), 0.0);
 }
 
-void BodySolveCoupling::add_forces(int worker, const SortedSolids& bodies, const PairLists& lists,
+void BodySolveCoupling::add_forces(int slot, const SortedSolids& bodies, const PairLists& lists,
                                    const PairRange* ranges, std::size_t begin, std::size_t end, const float* k) {
-  double* acc = worker_force_.data() + 6 * bodies_ * worker;
+  double* acc = slot_force_.data() + 6 * bodies_ * slot;
   for (std::size_t i = begin; i < end; ++i) {
     const PairRange& r = ranges[i];
     if (r.bodies == 0 || k[i] == 0) continue;
@@ -147,8 +147,8 @@ void BodySolveCoupling::add_forces(int worker, const SortedSolids& bodies, const
 void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodies, ThreadPool& pool) {
   for (std::size_t b = 0; b < bodies_; ++b) {
     if (!dynamic_[b]) continue;
-    for (int w = 0; w < workers_; ++w) {
-      double* f = worker_force_.data() + 6 * (bodies_ * w + b);
+    for (int w = 0; w < slots_; ++w) {
+      double* f = slot_force_.data() + 6 * (bodies_ * w + b);
       for (int k = 0; k < 6; ++k) force_[b][k] += f[k], f[k] = 0;
     }
     const Vec6 pushed = times(mobility_[b], force_[b]);

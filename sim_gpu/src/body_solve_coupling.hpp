@@ -32,8 +32,8 @@ class BodySolveCoupling {
   using Vec6 = std::array<double, 6>;
   using Mat6 = std::array<double, 36>;
 
-  // Sizes the per-worker sums for the model's bodies; nothing is allocated per step after this.
-  void init(const SimulationModel& m, int workers);
+  // Sizes the per-slot sums for the model's bodies; nothing is allocated per step after this.
+  void init(const SimulationModel& m, int slots);
   bool active() const { return active_; }
 
   // After the pairs are built: each dynamic body's mobility dt A^-1 at its pose and the
@@ -49,9 +49,9 @@ class BodySolveCoupling {
   // The same from every dynamic body's velocity now (the start of the step).
   void start_solve_from_body_states(const SimulationModel& m);
 
-  // Inside a worker's pass over the fluid [begin, end): the force the stiffness increments k of
-  // these particles put on the bodies, m k_i Psi_b grad W_ib per pair, summed per worker.
-  void add_forces(int worker, const SortedSolids& bodies, const PairLists& lists, const PairRange* ranges,
+  // Inside a slot's pass over the fluid [begin, end): the force the stiffness increments k of
+  // these particles put on the bodies, m k_i Psi_b grad W_ib per pair, summed per slot.
+  void add_forces(int slot, const SortedSolids& bodies, const PairLists& lists, const PairRange* ranges,
                   std::size_t begin, std::size_t end, const float* k);
 
   // After the increments are applied: the bodies' new predicted velocities, written to the
@@ -63,7 +63,7 @@ class BodySolveCoupling {
 
  private:
   bool active_ = false;
-  int workers_ = 0;
+  int slots_ = 0;
   std::size_t bodies_ = 0;
   float particle_mass_ = 0;
   std::vector<char> dynamic_;
@@ -71,9 +71,9 @@ class BodySolveCoupling {
   std::vector<Mat6> relax_;      // (I + L)^-1
   std::vector<Vec6> u_start_, u_, force_;
   std::vector<float> com_;       // 3 per body
-  std::vector<double> worker_force_;   // 6 per body per worker
-  std::vector<double> worker_response_;  // 36 per body per worker: sum factor J J^T
-  std::vector<double> worker_j_;       // 6 per body per worker, one particle's J
+  std::vector<double> slot_force_;   // 6 per body per slot
+  std::vector<double> slot_response_;  // 36 per body per slot: sum factor J J^T
+  std::vector<double> slot_j_;       // 6 per body per slot, one particle's J
 };
 
 }  // namespace hapfluid::sim::detail

@@ -26,9 +26,9 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
     devices_[d] = device_state_from(config::evaluate_motion(m_.devices[d].motion, 0.0));
   couplings_of_body_.resize(m_.bodies.size());
   for (auto& c : m_.couplings) couplings_of_body_[c.body].push_back(&c);
-  worker_max_accel_.assign(threads, 0);
-  worker_clamped_.assign(threads, 0);
-  neighbour_lists_.resize(threads);
+  slot_max_accel_.assign(pool_.slots(), 0);
+  slot_clamped_.assign(pool_.slots(), 0);
+  neighbour_lists_.resize(pool_.slots());
   // Density and pressure of the initial state, so that a frame exported before the first step
   // shows them (the step recomputes them from the same positions).
   sort_fluid();
@@ -77,9 +77,9 @@ void CpuSolver::build_body_view() { detail::sort_body_view(m_.params.grid, m_.bo
 // Eq. 2 over fluid neighbours, plus the boundary contribution rho0 V_b W of wall and body
 // particles (Akinci et al. 2012), then eq. 7. Negative pressures are clamped to zero: a free
 // surface must not pull particles together (tensile instability).
-void CpuSolver::compute_density(std::size_t begin, std::size_t end, int worker) {
+void CpuSolver::compute_density(std::size_t begin, std::size_t end, int slot) {
   detail::density_pass(m_.params, m_.fluid, fluid_sort_.cell_start.data(), m_.static_solids, body_view_, begin, end,
-                       neighbour_lists_[worker], neighbour_ranges_.data());
+                       neighbour_lists_[slot], neighbour_ranges_.data());
 }
 
 // Rigid particles have constant density (§4.1); what they get is the contact pressure from
@@ -92,9 +92,9 @@ void CpuSolver::compute_density(std::size_t begin, std::size_t end, int worker) 
 // would settle at twice the hydrostatic pressure. c is the first-moment correction of the fluid
 // volumes (gradient_correction.hpp); wall and body particles keep their volumes (c = 1) and
 // take the fluid particle's own pressure (pressure mirroring, Akinci et al. 2012).
-void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int worker) {
-  worker_max_accel_[worker] = detail::fluid_force_pass(m_.params, m_.fluid, m_.static_solids, body_view_, begin, end,
-                                                       neighbour_lists_[worker], neighbour_ranges_.data());
+void CpuSolver::compute_fluid_forces(std::size_t begin, std::size_t end, int slot) {
+  slot_max_accel_[slot] = detail::fluid_force_pass(m_.params, m_.fluid, m_.static_solids, body_view_, begin, end,
+                                                       neighbour_lists_[slot], neighbour_ranges_.data());
 }
 
 // Forces on the particles of dynamic bodies: from the fluid (f^haptic, eq. 8: the exact opposite
@@ -137,7 +137,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
 // Last resort: a particle that reaches a wall's first particle layer (or leaves the box on an
 // open side) is put back (counted; the walls alone must hold the fluid in every validation
 // scene, where the count stays zero).
-void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int worker, float dt) {
+void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int slot, float dt) {
   FluidParticles& f = m_.fluid;
   const SimulationParams& p = m_.params;
   std::uint64_t clamped = 0;
@@ -155,7 +155,7 @@ void CpuSolver::integrate_fluid(std::size_t begin, std::size_t end, int worker, 
     }
     clamped += out ? 1 : 0;
   }
-  worker_clamped_[worker] += clamped;
+  slot_clamped_[slot] += clamped;
 }
 
 void CpuSolver::step(double dt) {
@@ -180,7 +180,7 @@ void CpuSolver::step(double dt) {
   times_.density_s += seconds_since(t0);
 
   t0 = Clock::now();
-  std::fill(worker_max_accel_.begin(), worker_max_accel_.end(), 0.0f);
+  std::fill(slot_max_accel_.begin(), slot_max_accel_.end(), 0.0f);
   pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_fluid_forces(b, e, w); });
   if (body_view_.size() > 0)
     pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) { compute_body_particle_forces(b, e); });
@@ -193,7 +193,7 @@ void CpuSolver::step(double dt) {
   t0 = Clock::now();
   pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { integrate_fluid(b, e, w, dtf); });
   clamped_ = 0;
-  for (auto c : worker_clamped_) clamped_ += c;
+  for (auto c : slot_clamped_) clamped_ += c;
   times_.integration_s += seconds_since(t0);
 
   time_s_ += dt;

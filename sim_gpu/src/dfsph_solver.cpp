@@ -45,24 +45,25 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads)
     devices_[d] = device_state_from(config::evaluate_motion(m_.devices[d].motion, 0.0));
   couplings_of_body_.resize(m_.bodies.size());
   for (auto& c : m_.couplings) couplings_of_body_[c.body].push_back(&c);
-  lists_.resize(threads);
+  const int slots = pool_.slots();
+  lists_.resize(slots);
   // Room for the neighbourhood of a particle in the bulk (about 34 at h = 2 spacings) plus its
   // solids, so that the lists do not grow during the first steps.
   const std::size_t per_particle = 64;
-  for (int w = 0; w < threads; ++w) {
+  for (int w = 0; w < slots; ++w) {
     std::size_t b, e;
-    ThreadPool::chunk(m_.fluid.size(), threads, w, b, e);
+    ThreadPool::chunk(m_.fluid.size(), slots, w, b, e);
     lists_[w].reserve((e - b) * per_particle + 4096);
     lists_[w].reserve_scratch(4096);
   }
   ranges_.resize(m_.fluid.size());
   fields_.resize(m_.fluid.size());
-  worker_error_.assign(threads, 0);
-  worker_dots_.assign(2 * threads, 0);
-  worker_clamped_.assign(threads, 0);
-  worker_touching_.assign(threads, 0);
+  slot_error_.assign(slots, 0);
+  slot_dots_.assign(2 * slots, 0);
+  slot_clamped_.assign(slots, 0);
+  slot_touching_.assign(slots, 0);
   detail::set_body_particle_velocities(m_);
-  coupling_->init(m_, threads);
+  coupling_->init(m_, slots);
   const SimulationParams& p = m_.params;
   bool low[3], high[3];
   for (int a = 0; a < 3; ++a) low[a] = p.clamp_lo[a] < p.box_lo[a], high[a] = p.clamp_hi[a] > p.box_hi[a];
@@ -110,7 +111,7 @@ void DfsphSolver::settle(double duration_s) {
   time_s_ = 0;
   steps_ = 0;
   clamped_ = 0;
-  std::fill(worker_clamped_.begin(), worker_clamped_.end(), 0);
+  std::fill(slot_clamped_.begin(), slot_clamped_.end(), 0);
   times_ = {};
   iterations_ = {};
 }
@@ -206,10 +207,10 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
         step[i] = k;
         total[i] += k;
       }
-      worker_error_[w] = sum;
+      slot_error_[w] = sum;
     });
     double sum = 0;
-    for (double s : worker_error_) sum += s;
+    for (double s : slot_error_) sum += s;
     mean_error = sum / static_cast<double>(n);
     if (it >= ip.min_iterations && mean_error <= tolerance) break;
     apply();
@@ -296,7 +297,7 @@ int DfsphSolver::viscosity_solve(float dt) {
   detail::DfsphFields& d = fields_;
   auto reduce = [&](int k) {
     double s = 0;
-    for (int w = 0; w < pool_.size(); ++w) s += worker_dots_[2 * w + k];
+    for (int w = 0; w < pool_.slots(); ++w) s += slot_dots_[2 * w + k];
     return s;
   };
   auto apply = [&](const float* x, const float* y, const float* z, float* ox, float* oy, float* oz, std::size_t b,
@@ -304,7 +305,7 @@ int DfsphSolver::viscosity_solve(float dt) {
     detail::viscosity_apply(m_.params, fluid_statics_, body_view_, d, lists_[w], ranges_.data(), b, e, dt, x, y, z, ox,
                             oy, oz);
   };
-  // r = b - K v, p = M^-1 r; dots: r . p and b . b; and each worker's largest diagonal excess
+  // r = b - K v, p = M^-1 r; dots: r . p and b . b; and each slot's largest diagonal excess
   // sum_a (K_ii,aa - 1), for the bound on K's spectrum below.
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
     detail::viscosity_rhs(m_.params, fluid_statics_, body_view_, walls_, lists_[w], ranges_.data(), b, e, dt, d);
@@ -318,8 +319,8 @@ int DfsphSolver::viscosity_solve(float dt) {
       bb += d.visc_bx[i] * d.visc_bx[i] + d.visc_by[i] * d.visc_by[i] + d.visc_bz[i] * d.visc_bz[i];
       excess = std::max(excess, 1.0f / d.visc_inv_diag_x[i] + 1.0f / d.visc_inv_diag_y[i] + 1.0f / d.visc_inv_diag_z[i] - 3.0f);
     }
-    worker_dots_[2 * w] = rz, worker_dots_[2 * w + 1] = bb;
-    worker_error_[w] = excess;
+    slot_dots_[2 * w] = rz, slot_dots_[2 * w + 1] = bb;
+    slot_error_[w] = excess;
   });
   // A viscosity as low as water's barely acts within one step. K = I + dt L, and every pair term
   // of dt L is c (x_ij x_ij^T) (a rank-one block), so a row of dt L sums in magnitude to at most
@@ -329,7 +330,7 @@ int DfsphSolver::viscosity_solve(float dt) {
   // lambda^2 of the mode, so when lambda^2 is within the solve's own tolerance the explicit step
   // is the solve's answer, at no further pass.
   double lambda = 0;
-  for (int w = 0; w < pool_.size(); ++w) lambda = std::max(lambda, 2.0 * std::sqrt(3.0) * worker_error_[w]);
+  for (int w = 0; w < pool_.slots(); ++w) lambda = std::max(lambda, 2.0 * std::sqrt(3.0) * slot_error_[w]);
   if (lambda * lambda <= kViscosityTolerance) {
     body_viscous_forces();
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
@@ -350,7 +351,7 @@ int DfsphSolver::viscosity_solve(float dt) {
       double pap = 0;
       for (std::size_t i = b; i < e; ++i)
         pap += d.cg_px[i] * d.cg_ax[i] + d.cg_py[i] * d.cg_ay[i] + d.cg_pz[i] * d.cg_az[i];
-      worker_dots_[2 * w] = pap;
+      slot_dots_[2 * w] = pap;
     });
     const double pap = reduce(0);
     if (!(pap > 0)) break;  // converged to round-off (or p = 0)
@@ -363,7 +364,7 @@ int DfsphSolver::viscosity_solve(float dt) {
         d.cg_rx[i] -= alpha * d.cg_ax[i], d.cg_ry[i] -= alpha * d.cg_ay[i], d.cg_rz[i] -= alpha * d.cg_az[i];
         s += d.cg_rx[i] * d.cg_rx[i] + d.cg_ry[i] * d.cg_ry[i] + d.cg_rz[i] * d.cg_rz[i];
       }
-      worker_dots_[2 * w] = s;
+      slot_dots_[2 * w] = s;
     });
     rr = reduce(0);
     if (rr <= limit) {
@@ -378,7 +379,7 @@ int DfsphSolver::viscosity_solve(float dt) {
         d.cg_az[i] = d.visc_inv_diag_z[i] * d.cg_rz[i];
         s += d.cg_rx[i] * d.cg_ax[i] + d.cg_ry[i] * d.cg_ay[i] + d.cg_rz[i] * d.cg_az[i];
       }
-      worker_dots_[2 * w] = s;
+      slot_dots_[2 * w] = s;
     });
     const double rz_new = reduce(0);
     const float beta = static_cast<float>(rz_new / rz);
@@ -397,14 +398,14 @@ int DfsphSolver::viscosity_solve(float dt) {
 void DfsphSolver::body_contacts() {
   BodyParticles& bp = m_.body_particles;
   if (bp.size() == 0) return;
-  std::fill(worker_touching_.begin(), worker_touching_.end(), 0);
+  std::fill(slot_touching_.begin(), slot_touching_.end(), 0);
   pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
     detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, bp, b, e);
   });
   pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int w) {
-    worker_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, b, e) ? 1 : 0;
+    slot_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, b, e) ? 1 : 0;
   });
-  bodies_touching_ = std::any_of(worker_touching_.begin(), worker_touching_.end(), [](char c) { return c != 0; });
+  bodies_touching_ = std::any_of(slot_touching_.begin(), slot_touching_.end(), [](char c) { return c != 0; });
 }
 
 void DfsphSolver::start_density_coupling(double dt) {
@@ -453,10 +454,10 @@ void DfsphSolver::integrate_positions(float dt) {
       }
       clamped += out ? 1 : 0;
     }
-    worker_clamped_[w] += clamped;
+    slot_clamped_[w] += clamped;
   });
   clamped_ = 0;
-  for (auto c : worker_clamped_) clamped_ += c;
+  for (auto c : slot_clamped_) clamped_ += c;
 }
 
 void DfsphSolver::step(double dt) {

@@ -30,7 +30,7 @@ bool spin_until(Done&& done, long ns) {
 
 }  // namespace
 
-ThreadPool::ThreadPool(int threads) : threads_(threads) {
+ThreadPool::ThreadPool(int threads) : threads_(threads), slots_(threads > kSlots ? threads : kSlots) {
   if (threads < 1) throw std::invalid_argument("thread count must be >= 1");
   for (int w = 1; w < threads; ++w) helpers_.emplace_back([this, w] { worker_loop(w); });
 }
@@ -44,13 +44,23 @@ ThreadPool::~ThreadPool() {
   for (auto& t : helpers_) t.join();
 }
 
-void ThreadPool::run(std::size_t count, const Job& fn) {
-  if (threads_ == 1) {
-    fn(0, count, 0);
-    return;
+void ThreadPool::take_slots() {
+  for (int s = next_slot_.fetch_add(1, std::memory_order_relaxed); s < slots_;
+       s = next_slot_.fetch_add(1, std::memory_order_relaxed)) {
+    std::size_t begin, end;
+    chunk(count_, slots_, s, begin, end);
+    (*job_)(begin, end, s);
   }
+}
+
+void ThreadPool::run(std::size_t count, const Job& fn) {
   job_ = &fn;
   count_ = count;
+  next_slot_.store(0, std::memory_order_relaxed);
+  if (threads_ == 1) {
+    take_slots();
+    return;
+  }
   pending_.store(threads_ - 1, std::memory_order_relaxed);
   {
     // Under the mutex, so that a helper about to sleep either sees the new generation or is
@@ -59,9 +69,7 @@ void ThreadPool::run(std::size_t count, const Job& fn) {
     generation_.fetch_add(1, std::memory_order_release);
   }
   start_cv_.notify_all();
-  std::size_t begin, end;
-  chunk(count, threads_, 0, begin, end);
-  fn(begin, end, 0);
+  take_slots();
   auto all_done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
   if (!spin_until(all_done, kSpinNs)) {
     std::unique_lock lock(mutex_);
@@ -81,9 +89,7 @@ void ThreadPool::worker_loop(int w) {
     }
     if (stopping_.load()) return;
     seen = generation_.load(std::memory_order_acquire);
-    std::size_t begin, end;
-    chunk(count_, threads_, w, begin, end);
-    (*job_)(begin, end, w);
+    take_slots();
     if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       // The caller may be asleep on done_cv_: take the mutex so the wake-up cannot fall between
       // its check and its wait.

@@ -56,7 +56,7 @@ inline double fluid_kinetic_energy(const CpuSolver& s) {
   return 0.5 * s.params().fluid_particle_mass_kg * e;
 }
 
-inline void run_for(CpuSolver& s, double seconds, double frame = 0.01) {
+inline void run_for(Solver& s, double seconds, double frame = 0.01) {
   const int frames = static_cast<int>(std::lround(seconds / frame));
   for (int k = 0; k < frames; ++k) s.advance(frame);
 }

@@ -44,10 +44,10 @@ class CpuSolver final : public Solver {
  private:
   void sort_fluid();
   void build_body_view();
-  void compute_density(std::size_t begin, std::size_t end, int worker);
-  void compute_fluid_forces(std::size_t begin, std::size_t end, int worker);
+  void compute_density(std::size_t begin, std::size_t end, int slot);
+  void compute_fluid_forces(std::size_t begin, std::size_t end, int slot);
   void compute_body_particle_forces(std::size_t begin, std::size_t end);
-  void integrate_fluid(std::size_t begin, std::size_t end, int worker, float dt);
+  void integrate_fluid(std::size_t begin, std::size_t end, int slot, float dt);
 
   SimulationModel m_;
   ThreadPool pool_;
@@ -55,9 +55,9 @@ class CpuSolver final : public Solver {
   SortedSolids body_view_;  // dynamic body particles sorted by cell (rebuilt each step)
   std::vector<DeviceState> devices_;
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
-  std::vector<float> worker_max_accel_;
-  std::vector<std::uint64_t> worker_clamped_;
-  std::vector<detail::NeighbourLists> neighbour_lists_;  // one per worker
+  std::vector<float> slot_max_accel_;
+  std::vector<std::uint64_t> slot_clamped_;
+  std::vector<detail::NeighbourLists> neighbour_lists_;  // one per slot
   std::vector<detail::NeighbourRange> neighbour_ranges_;  // one per fluid particle
   double time_s_ = 0;
   std::uint64_t steps_ = 0;

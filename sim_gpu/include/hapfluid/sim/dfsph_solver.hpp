@@ -46,7 +46,7 @@ struct alignas(16) Packed4 {
   float x = 0, y = 0, z = 0, w = 0;
 };
 
-// Pairs of the fluid particles of one worker: fluid neighbours, then static solid, then dynamic
+// Pairs of the fluid particles of one slot: fluid neighbours, then static solid, then dynamic
 // body neighbours of each particle.
 struct PairLists {
   std::vector<std::uint32_t> index;
@@ -144,15 +144,15 @@ class DfsphSolver final : public Solver {
   WallMap walls_;
   std::vector<DeviceState> devices_;
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
-  std::vector<detail::PairLists> lists_;  // one per worker
+  std::vector<detail::PairLists> lists_;  // one per slot
   std::vector<detail::PairRange> ranges_;
   detail::DfsphFields fields_;
   std::unique_ptr<detail::BodySolveCoupling> coupling_;
   bool coupled_ = false;  // this step's solves move the bodies (not while settling)
-  std::vector<double> worker_error_;
-  std::vector<double> worker_dots_;  // 2 per worker
-  std::vector<std::uint64_t> worker_clamped_;
-  std::vector<char> worker_touching_;
+  std::vector<double> slot_error_;
+  std::vector<double> slot_dots_;  // 2 per slot
+  std::vector<std::uint64_t> slot_clamped_;
+  std::vector<char> slot_touching_;
   bool bodies_touching_ = false;
   bool settling_ = false;
   double time_s_ = 0;

@@ -1,7 +1,10 @@
-// A fixed-size pool of worker threads for the CPU solver. Work is split statically: the range
-// [0, count) is cut into `threads` equal contiguous chunks, chunk i always goes to worker i, and
-// each worker writes only its own outputs. Results are therefore bit-for-bit identical from run
-// to run for a given thread count (no work stealing, no atomics in the physics).
+// A fixed-size pool of worker threads for the CPU solver. Work is cut into a fixed number of
+// slots, contiguous equal chunks of [0, count): slot s always covers the same items and writes
+// only its own outputs (its neighbour list, its partial sums), whichever thread runs it, and the
+// threads take the slots in turn as they come free. Results are therefore bit-for-bit identical
+// from run to run, and for any thread count up to kSlots (no atomics in the physics), and a thread
+// that the scheduler parks (a 1 kHz real-time task on its core, a renderer) delays one slot, not
+// half of every pass.
 //
 // A DFSPH step hands out a hundred or more short jobs (every solver iteration is two), so a
 // hand-off must cost far less than a futex wake-up: helpers and the caller spin for a short
@@ -31,42 +34,51 @@ class ThreadPool {
   ThreadPool& operator=(const ThreadPool&) = delete;
 
   int size() const { return threads_; }
+  // How many slots every parallel_for cuts its range into: per-slot outputs are sized by it.
+  int slots() const { return slots_; }
 
-  // Calls fn(begin, end, worker) for each worker's chunk and returns when all are done. `fn` is
+  // Calls fn(begin, end, slot) for each slot's chunk and returns when all are done. `fn` is
   // called through a plain reference (no std::function), so a step allocates nothing however
   // much its lambdas capture.
   template <class Fn>
   void parallel_for(std::size_t count, Fn&& fn) {
     using F = std::remove_reference_t<Fn>;
     run(count, Job{const_cast<void*>(static_cast<const void*>(&fn)),
-                   [](void* f, std::size_t b, std::size_t e, int w) { (*static_cast<F*>(f))(b, e, w); }});
+                   [](void* f, std::size_t b, std::size_t e, int s) { (*static_cast<F*>(f))(b, e, s); }});
   }
 
-  // The chunk worker `w` of `threads` gets for `count` items: the same split parallel_for uses.
-  static void chunk(std::size_t count, int threads, int w, std::size_t& begin, std::size_t& end) {
-    begin = count * static_cast<std::size_t>(w) / static_cast<std::size_t>(threads);
-    end = count * static_cast<std::size_t>(w + 1) / static_cast<std::size_t>(threads);
+  // The chunk slot `s` of `slots` covers for `count` items: the same split parallel_for uses.
+  static void chunk(std::size_t count, int slots, int s, std::size_t& begin, std::size_t& end) {
+    begin = count * static_cast<std::size_t>(s) / static_cast<std::size_t>(slots);
+    end = count * static_cast<std::size_t>(s + 1) / static_cast<std::size_t>(slots);
   }
+
+  // Slots per pass for up to this many threads (more threads: a slot each).
+  static constexpr int kSlots = 16;
 
  private:
   struct Job {
     void* fn;
-    void (*call)(void* fn, std::size_t begin, std::size_t end, int worker);
-    void operator()(std::size_t begin, std::size_t end, int worker) const { call(fn, begin, end, worker); }
+    void (*call)(void* fn, std::size_t begin, std::size_t end, int slot);
+    void operator()(std::size_t begin, std::size_t end, int slot) const { call(fn, begin, end, slot); }
   };
   void run(std::size_t count, const Job& job);
+  // Runs slots of the current job until none is left.
+  void take_slots();
   void worker_loop(int w);
 
   // How long a helper waits for the next job, or the caller for the helpers, before sleeping.
   static constexpr long kSpinNs = 50'000;
 
   int threads_;
+  int slots_;
   std::vector<std::thread> helpers_;
   std::mutex mutex_;
   std::condition_variable start_cv_, done_cv_;
   // job_ and count_ are written before generation_ is released and read after it is acquired.
   const Job* job_ = nullptr;
   std::size_t count_ = 0;
+  std::atomic<int> next_slot_{0};
   std::atomic<unsigned long> generation_{0};
   std::atomic<int> pending_{0};
   std::atomic<bool> stopping_{false};
