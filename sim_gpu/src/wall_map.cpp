@@ -2,59 +2,71 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace hapfluid::sim {
 namespace {
 
 constexpr int kTableSize = 513;
 
-// A(u): the kernel integrated over the plane at distance |u| from the particle,
-// 2 pi int_|u|^h W(r) r dr.
-double plane_integral(double u, double h) {
-  const double a = std::fabs(u);
-  if (a >= h) return 0;
-  const int n = 400;
-  double sum = 0;
-  for (int k = 0; k < n; ++k) {
-    const double r = a + (h - a) * (k + 0.5) / n;
-    sum += cubic_w_d(r, h) * r;
-  }
-  return 2 * kPi * sum * (h - a) / n;
+// The cubic spline's shape w(q) (W = 8 / (pi h^3) w(r / h)) times q and times q^2, integrated
+// from a to 1 in closed form: I(a) = int_a^1 w q dq, J(a) = int_a^1 w q^2 dq, piece by piece
+// (6 q^3 - 6 q^2 + 1 up to q = 1/2, 2 (1 - q)^3 beyond).
+double inner_q(double q) { return 1.2 * q * q * q * q * q - 1.5 * q * q * q * q + 0.5 * q * q; }
+double outer_q(double q) { return q * q - 2 * q * q * q + 1.5 * q * q * q * q - 0.4 * q * q * q * q * q; }
+double inner_q2(double q) { return q * q * q * q * q * q - 1.2 * q * q * q * q * q + q * q * q / 3; }
+double outer_q2(double q) {
+  return 2.0 / 3.0 * q * q * q - 1.5 * q * q * q * q + 1.2 * q * q * q * q * q - q * q * q * q * q * q / 3;
+}
+double integral_q(double a) {
+  if (a >= 1) return 0;
+  if (a >= 0.5) return outer_q(1) - outer_q(a);
+  return inner_q(0.5) - inner_q(a) + outer_q(1) - outer_q(0.5);
+}
+double integral_q2(double a) {
+  if (a >= 1) return 0;
+  if (a >= 0.5) return outer_q2(1) - outer_q2(a);
+  return inner_q2(0.5) - inner_q2(a) + outer_q2(1) - outer_q2(0.5);
 }
 
+// A(u): the kernel integrated over the plane at distance |u| from the particle,
+// 2 pi int_|u|^h W(r) r dr = 16 / h I(|u| / h).
+double plane_integral(double u, double h) { return 16.0 / h * integral_q(std::fabs(u) / h); }
+
 // V(u): the kernel integrated over the half-space beyond a plane at distance u (negative: the
-// particle is inside the solid): int_u^h A(t) dt, and 1 - V(-u) inside.
+// particle is inside the solid): int_u^h A(t) dt = 16 (J(a) - a I(a)) with a = u / h (by parts),
+// and 1 - V(-u) inside.
 double half_space_share(double u, double h) {
   if (u >= h) return 0;
   if (u < 0) return 1 - half_space_share(-u, h);
-  const int n = 400;
-  double sum = 0;
-  for (int k = 0; k < n; ++k) sum += plane_integral(u + (h - u) * (k + 0.5) / n, h);
-  return sum * (h - u) / n;
+  const double a = u / h;
+  return 16.0 * (integral_q2(a) - a * integral_q(a));
 }
 
 constexpr double kNoSlipWeightMax = 1.5;
 
-// The friction integrals at distance u from the wall's surface (negative: inside), with the
-// pair gradient's normalisation g (grad W = g W'(r) x / r): for the points of the half-space
-// beyond u, int (-g W'(r) / r) / (r^2 + 0.01 h^2) x_a^2 dV, normal and one tangential axis.
-// Plane by plane: at depth t the plane contributes 2 pi int phi(r) rho drho times t^2 (normal)
-// or times rho^2 / 2 (a tangent: the mean of x^2 over the circle), r^2 = t^2 + rho^2 < h^2,
-// each weighted for no slip at the surface (below).
-void friction_integrals(double u, double h, double g, double& normal, double& tangent) {
-  normal = tangent = 0;
-  if (u >= h) return;
-  const double lo = std::max(u, -h), eps2 = 0.01 * h * h;
-  const int planes = 200, rings = 200;
-  const double dt = (h - lo) / planes;
-  for (int a = 0; a < planes; ++a) {
-    const double t = lo + (a + 0.5) * dt;
-    const double rho_max = std::sqrt(std::max(0.0, h * h - t * t));
-    // No slip at the wall's surface (Morris, Fox & Zhu 1997): the wall point at depth t - u
-    // behind it carries the fluid's velocity extrapolated through zero, -(t - u) / u v_i, so it
-    // weighs 1 + (t - u) / u = t / u, at most 1.5 (their bound, for a particle at the surface).
-    const double beta = u > 0 ? std::min(t / u, kNoSlipWeightMax) : kNoSlipWeightMax;
-    const double dr = rho_max / rings;
+// The friction integrals, with the pair gradient's normalisation g (grad W = g W'(r) x / r): for
+// the points of the half-space beyond u (the distance from the wall's surface; negative: inside),
+// int beta (-g W'(r) / r) / (r^2 + 0.01 h^2) x_a^2 dV, normal and one tangential axis. Plane by
+// plane: at depth t the plane contributes 2 pi int phi(r) rho drho times t^2 (normal) or times
+// rho^2 / 2 (a tangent: the mean of x^2 over the circle), r^2 = t^2 + rho^2 < h^2. A plane's
+// contribution does not depend on u, so the planes are integrated once, on a fine grid over
+// [-h, h], and each table entry sums those beyond its u with its weight beta.
+struct FrictionPlanes {
+  static constexpr int kPlanes = 4096;
+  double h = 0, dt = 0;
+  std::vector<double> normal, tangent;  // per plane, times its thickness dt
+};
+
+FrictionPlanes friction_planes(double h, double g) {
+  FrictionPlanes p;
+  p.h = h, p.dt = 2 * h / FrictionPlanes::kPlanes;
+  p.normal.resize(FrictionPlanes::kPlanes), p.tangent.resize(FrictionPlanes::kPlanes);
+  const double eps2 = 0.01 * h * h;
+  const int rings = 200;
+  for (int a = 0; a < FrictionPlanes::kPlanes; ++a) {
+    const double t = -h + (a + 0.5) * p.dt;
+    const double dr = std::sqrt(std::max(0.0, h * h - t * t)) / rings;
     double n = 0, tg = 0;
     for (int b = 0; b < rings; ++b) {
       const double rho = (b + 0.5) * dr, r = std::sqrt(t * t + rho * rho);
@@ -62,8 +74,23 @@ void friction_integrals(double u, double h, double g, double& normal, double& ta
       n += phi * rho;
       tg += phi * rho * rho * rho / 2;
     }
-    normal += beta * 2 * kPi * n * dr * t * t * dt;
-    tangent += beta * 2 * kPi * tg * dr * dt;
+    p.normal[a] = 2 * kPi * n * dr * t * t * p.dt;
+    p.tangent[a] = 2 * kPi * tg * dr * p.dt;
+  }
+  return p;
+}
+
+void friction_integrals(const FrictionPlanes& p, double u, double& normal, double& tangent) {
+  normal = tangent = 0;
+  for (int a = 0; a < FrictionPlanes::kPlanes; ++a) {
+    const double t = -p.h + (a + 0.5) * p.dt;
+    if (t < u) continue;
+    // No slip at the wall's surface (Morris, Fox & Zhu 1997): the wall point at depth t - u
+    // behind it carries the fluid's velocity extrapolated through zero, -(t - u) / u v_i, so it
+    // weighs 1 + (t - u) / u = t / u, at most 1.5 (their bound, for a particle at the surface).
+    const double beta = u > 0 ? std::min(t / u, kNoSlipWeightMax) : kNoSlipWeightMax;
+    normal += beta * p.normal[a];
+    tangent += beta * p.tangent[a];
   }
 }
 
@@ -181,12 +208,12 @@ WallMap make_wall_map(const float lo[3], const float hi[3], const bool low_wall[
   // Gradient: the wall's must cancel the fluid's (a positive z-sum: the neighbours lie above).
   m.gradient_scale = static_cast<float>(fluid_gradient / plane_integral(u0, h));
   // Friction, with the pair gradients' own normalisation (the lists' V_j grad W).
-  const double g = kernel.grad_scale / (48.0 / (kPi * h * h * h) / h);
+  const FrictionPlanes planes = friction_planes(h, kernel.grad_scale / (48.0 / (kPi * h * h * h) / h));
   m.friction_normal.resize(kTableSize);
   m.friction_tangent.resize(kTableSize);
   for (int k = 0; k < kTableSize; ++k) {
     double normal = 0, tangent = 0;
-    friction_integrals(-h + k * m.du, h, g, normal, tangent);
+    friction_integrals(planes, -h + k * m.du, normal, tangent);
     m.friction_normal[k] = static_cast<float>(normal);
     m.friction_tangent[k] = static_cast<float>(tangent);
   }
