@@ -1,5 +1,8 @@
 #include "hapfluid/sim/thread_pool.hpp"
 
+#include <sched.h>
+
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -29,6 +32,13 @@ bool spin_until(Done&& done, long ns) {
 }
 
 }  // namespace
+
+int usable_cpus() {
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) != 0) return 1;
+  const int n = CPU_COUNT(&set);
+  return n > 0 ? std::min(n, kMaxWorkerThreads) : 1;
+}
 
 ThreadPool::ThreadPool(int threads) : threads_(threads), slots_(threads > kSlots ? threads : kSlots) {
   if (threads < 1) throw std::invalid_argument("thread count must be >= 1");

@@ -51,7 +51,7 @@ int run_batch_mode(const sim::BatchOptions& o, bool vk_validation, const std::st
 }  // namespace
 
 int main(int argc, char** argv) {
-  const int cores = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
+  const int cores = sim::usable_cpus();
   sim::BatchOptions batch;
   sim::LiveOptions live;
   batch.threads = live.threads = cores;
@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
                  "batch: simulated seconds (default: the scene's duration_s); live: wall seconds (default 0: until "
                  "SIGINT/SIGTERM)")
       ->check(sim::seconds_from(0, false));
-  app.add_option("--threads", threads, "worker threads of the cpu backend (default: all cores)")
+  app.add_option("--threads", threads, "worker threads of the cpu backend (default: one per CPU this process may use)")
       ->check(sim::whole_number_in(1, sim::kMaxWorkerThreads));
   app.add_option("--export-every", export_every_s,
                  "particle frame interval in simulated seconds (batch default 0.05, live default 0: none; 0: none)")

@@ -25,6 +25,11 @@ namespace hapfluid::sim {
 // The most worker threads haptic-sim runs (--threads, batch and live).
 inline constexpr int kMaxWorkerThreads = 256;
 
+// The CPUs this process may run on (its affinity: a systemd CPUAffinity=, taskset, isolated cores
+// left out), at least 1: the default thread count. More threads than that would take turns on
+// one CPU and wait for each other at every pass.
+int usable_cpus();
+
 class ThreadPool {
  public:
   // threads >= 1; the calling thread is worker 0, so threads - 1 helpers are started.
