@@ -120,7 +120,7 @@ class DeviceInput {
 struct Counters {
   std::uint64_t samples = 0, particle_frames = 0, device_records = 0, lag_events = 0;
   std::uint64_t clamped_reported = 0;  // wall clamp events when first reported (0: none yet)
-  double dropped_backlog_s = 0, dt_min = 1e300, dt_max = 0, step_wall_max_s = 0;
+  double dropped_backlog_s = 0, dt_min = 1e300, dt_max = 0, step_wall_max_s = 0, step_wall_total_s = 0;
   int vtk_frames = 0;
   double vtk_write_max_s = 0, vtk_write_total_s = 0;
   std::string vtk_error;
@@ -169,6 +169,8 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
     << "  \"kept_up_with_wall_clock\": " << (c.lag_events == 0 ? "true" : "false") << ",\n"
     << "  \"dropped_backlog_s\": " << num(c.dropped_backlog_s) << ",\n"
     << "  \"longest_step_wall_s\": " << num(c.step_wall_max_s) << ",\n"
+    // The share of the wall clock the steps took: the sim's headroom is what is left of 1.
+    << "  \"step_load\": " << num(c.step_wall_total_s / wall) << ",\n"
     << "  \"sim_samples_published\": " << c.samples << ",\n"
     << "  \"particle_frames_published\": " << c.particle_frames << ",\n"
     << "  \"vtk_export_every_s\": " << num(o.export_every_s) << ",\n"
@@ -429,6 +431,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       solver->step(dt);
       now = shm::monotonic_ns();
       c.step_wall_max_s = std::max(c.step_wall_max_s, double(now - step_start) * 1e-9);
+      c.step_wall_total_s += double(now - step_start) * 1e-9;
       c.dt_min = std::min(c.dt_min, dt), c.dt_max = std::max(c.dt_max, dt);
       // The last-resort wall clamp is a fault of the step (the fluid outran its walls), not a fix:
       // said once when it first acts, then counted in status lines and stats.json.
