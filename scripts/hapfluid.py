@@ -176,18 +176,20 @@ class Stack:
         self.procs = []  # (name, Popen, log file)
         self.started_at = {}
 
-    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0, cpus=None):
+    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0, cpus=None, idle=False):
         log = open(self.out / "logs" / f"{name}.log", "w")
 
         def preexec():
             if nice:
                 try_nice(nice)
+            if idle:
+                os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
             if cpus:
                 os.sched_setaffinity(0, cpus)
         if fifo_priority and can_use_fifo(fifo_priority):
             args = ["chrt", "-f", str(fifo_priority)] + list(args)
         p = subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE if stdout_pipe else log,
-                             stderr=log, text=True, preexec_fn=preexec if nice or cpus else None)
+                             stderr=log, text=True, preexec_fn=preexec if nice or cpus or idle else None)
         self.procs.append((name, p, log))
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         return p
@@ -259,13 +261,15 @@ def cyclictest_placement(rt: dict) -> int:
 
 
 def cpu_placement(rt: dict) -> tuple[set, set]:
-    """(CPUs of the fake devices, CPUs of the sim, trace and renderer) beside a loop on rt["cpu"].
+    """(CPUs of the fake devices, CPUs of the trace logger and the renderer) beside a loop on
+    rt["cpu"].
 
-    As on a rig (scripts/systemd: haptic-rt alone on its core, the other services off it): the
-    sim, the trace logger and the renderer stay off the loop's CPU. The fake devices stand in for
-    hardware outside the host and go beside the loop, whose CPU is idle but for ~2% of loop work
-    (they run below its priority): unpinned, their 1 kHz FIFO ticks preempted the sim on the
-    other CPU. Empty sets (no pinning) when the loop is not pinned or there is a single CPU."""
+    As on a rig (scripts/systemd): the trace logger and the renderer stay off the loop's CPU; the
+    sim is not pinned (it may use every core the loop does not need, and the loop's SCHED_FIFO
+    preempts it). The fake devices stand in for hardware outside the host and go beside the loop,
+    whose CPU is idle but for ~2% of loop work (they run below its priority): unpinned, their
+    1 kHz FIFO ticks preempted the sim on the other CPU. Empty sets (no pinning) when the loop is
+    not pinned or there is a single CPU."""
     cpus = os.sched_getaffinity(0)
     loop = rt.get("cpu", -1)
     if loop < 0 or loop not in cpus or len(cpus) < 2:
@@ -360,7 +364,7 @@ def run_live(args, scene_path, out, bin_dir):
                                          "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
                                          "--threads", str(args.sim_threads), "--backend", args.backend,
                                          "--export-every", str(args.export_every)],
-                          nice=-5, cpus=service_cpus)  # feeds the haptic loop: ahead of builds and the renderer
+                          nice=-5)  # feeds the haptic loop: ahead of builds and the renderer, on every CPU (as its unit)
         if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
             raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
         if not args.no_render and not (bin_dir / "haptic-render").exists():
@@ -371,8 +375,9 @@ def run_live(args, scene_path, out, bin_dir):
             render += [] if args.windowed else ["--headless", "--out", out / "frames", "--no-mp4"]
             # It ends by itself (it has no SIGINT handler to save a last frame cleanly).
             render += ["--duration", f"{max(1.0, duration - (time.monotonic() - started)):.2f}"]
-            # The renderer (lavapipe: CPU rasterisation) yields the CPU to the loop and the sim.
-            stack.start("haptic-render", render, nice=10, cpus=service_cpus)
+            # The renderer (lavapipe: CPU rasterisation) draws with the CPU time the loop and the
+            # sim leave: the idle policy, as its unit (a waking sim thread takes its core at once).
+            stack.start("haptic-render", render, cpus=service_cpus, idle=True)
         deadline = started + duration
         while time.monotonic() < deadline:
             dead = stack.early_exits()
@@ -450,6 +455,7 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
         summary["sim_steps_per_s"] = round(stats["steps_per_s"], 1)
         summary["real_time_factor"] = round(stats["real_time_factor"], 3)
         summary["sim_kept_up"] = stats["kept_up_with_wall_clock"]
+        summary["sim_step_load"] = round(stats["step_load"], 3)
         summary["fluid_particles"] = stats["particles"]["fluid"]
         summary["sim_backend"] = stats.get("backend", "cpu")
         summary["sim_device"] = stats.get("device", {}).get("name", "")
@@ -520,7 +526,8 @@ def print_summary(summary):
         kept = "kept up with the wall clock" if summary["sim_kept_up"] else "could NOT keep up with the wall clock"
         print(f"  sim: {summary['sim_backend']} backend on {summary['sim_device']} ({summary['sim_backend_reason']})")
         print(f"  sim: {summary['sim_steps_per_s']} steps/s, real-time factor {summary['real_time_factor']} "
-              f"({kept}), {summary['fluid_particles']} fluid particles")
+              f"({kept}), {summary['fluid_particles']} fluid particles, steps took "
+              f"{summary['sim_step_load']:.0%} of the wall clock")
     print(f"  rendered frames: {summary.get('rendered_frames', 0)}, VTK particle frames: {summary.get('vtk_frames', 0)}")
     w, ct = summary.get("wake_latency_us"), summary.get("cyclictest_us")
 
@@ -558,8 +565,8 @@ def main():
     # start, a loaded machine): at 1.5 s the stirring stroke began before the sim's first step.
     run.add_argument("--lead-in", type=float, default=3.0,
                      help="seconds the fake hands hold still before their script starts (loop engages, fluid settles)")
-    run.add_argument("--sim-threads", type=int, default=max(1, (os.cpu_count() or 2) - 1),
-                     help="simulator threads (default: one core left for the loop and the devices)")
+    run.add_argument("--sim-threads", type=int, default=len(os.sched_getaffinity(0)),
+                     help="simulator threads (default: one per CPU; the loop's SCHED_FIFO preempts them)")
     run.add_argument("--export-every", type=float, default=0.5,
                      help="VTK particle frames (sim/particles/, ParaView) every S simulated seconds (0: none)")
     run.add_argument("--no-cyclictest", action="store_true",

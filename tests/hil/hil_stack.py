@@ -34,6 +34,17 @@ from hapfluid import cpu_placement, device_scene, load_toml, private_rig_text  #
 LEAD_IN_S = 1.5  # scripted hands hold still this long (the loop engages, the fluid settles)
 SCENES = ROOT / "config" / "scenes"
 RIGS = ROOT / "config" / "rigs"
+# The stack tests' own scenes (their stirring workload, light enough for one sim thread).
+HIL_SCENES = pathlib.Path(__file__).resolve().parent / "scenes"
+STIR = "stirring_light"
+
+
+def scene_file(scene) -> pathlib.Path:
+    """A scene by path, or by name: the stack tests' own (tests/hil/scenes), else a shipped one."""
+    if isinstance(scene, pathlib.Path):
+        return scene
+    own = HIL_SCENES / f"{scene}.toml"
+    return own if own.exists() else SCENES / f"{scene}.toml"
 
 # safety::Fault bits (rt_core/include/hapfluid/safety/flags.hpp)
 FAULT_ESTOP = 1 << 0
@@ -71,14 +82,17 @@ WAIT_TIMEOUT_S = 40.0
 SIM_STATUS_EVERY_S = 0.2  # the sim's status lines (simulated time, samples) the waits read
 
 
-def _placed(nice, cpus):
-    """A child's set-up before exec: its nice value and CPUs (empty: inherited)."""
+def _placed(nice, cpus, idle=False):
+    """A child's set-up before exec: its nice value or the idle policy, and its CPUs (empty:
+    inherited)."""
     def preexec():
         if nice:
             try:
                 os.nice(nice)
             except PermissionError:
                 pass
+        if idle:
+            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
         if cpus:
             os.sched_setaffinity(0, cpus)
     return preexec
@@ -285,7 +299,7 @@ class TraceFollower:
 
 class Stack:
     def __init__(self, binary, tmp_path: pathlib.Path, rig="fake_single.toml", tag="hil", lead_in_s=LEAD_IN_S,
-                 scene="spoon_stirring"):
+                 scene=STIR):
         """A private copy of a shipped rig, as `make run` makes it: own loopback sockets and shm
         prefix, emulated arms playing `scene`'s hands in their device frame (hapfluid.private_rig_text)."""
         self.binary = binary
@@ -293,7 +307,7 @@ class Stack:
         self.dir = tmp_path
         self.tag = f"{tag}-{os.getpid()}-{time.monotonic_ns() % 10_000_000}"
         self.prefix = f"hapfluid-hil-{self.tag}"
-        text, self.offsets = private_rig_text((RIGS / rig).read_text(), load_toml(SCENES / f"{scene}.toml"), self.tag)
+        text, self.offsets = private_rig_text((RIGS / rig).read_text(), load_toml(scene_file(scene)), self.tag)
         self.sockets = re.findall(r'address = "(/tmp/hapfluid-[^"]+\.sock)"', text)
         self.rig = tmp_path / "rig.toml"
         self.rig.write_text(text)
@@ -315,7 +329,7 @@ class Stack:
         motion="scene:<path>:<device>", or for sim() (its scripted hands, played until the loop's
         device states appear). Lives in <dir>/scenes; its mesh paths are made absolute, so they
         resolve as they did beside the original."""
-        source = scene if isinstance(scene, pathlib.Path) else SCENES / f"{scene}.toml"
+        source = scene_file(scene)
         scenes = self.dir / "scenes"
         scenes.mkdir(exist_ok=True)
         lines, in_motion = [], False
@@ -334,22 +348,22 @@ class Stack:
         return path
 
     # ---- processes -------------------------------------------------------------------------
-    def _start(self, name, args, stdout=None, nice=0, cpus=None):
+    def _start(self, name, args, stdout=None, nice=0, cpus=None, idle=False):
         """cpus: where the process runs (None: off the loop's CPU, as every non-real-time part)."""
         log = open(self.dir / f"{name}.log", "a")
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True,
-                             preexec_fn=_placed(nice, self.service_cpus if cpus is None else cpus))
+                             preexec_fn=_placed(nice, self.service_cpus if cpus is None else cpus, idle))
         self.procs[name] = p
         return p
 
     def fake_device(self, device="hand", motion="hold", name=None, extra=()):
         name = name or f"fake-{device}"
         if motion.startswith("scene:"):  # scene:FILE:DEVICE -> the same scene with the lead-in
-            scene_file, scene_device = motion[len("scene:"):].rsplit(":", 1)
+            source, scene_device = motion[len("scene:"):].rsplit(":", 1)
             copy_dir = self.dir / f"{name}-scene"
             copy_dir.mkdir(exist_ok=True)
-            motion = f"scene:{device_scene(pathlib.Path(scene_file), copy_dir, self.lead_in_s, self.offsets)}:{scene_device}"
+            motion = f"scene:{device_scene(pathlib.Path(source), copy_dir, self.lead_in_s, self.offsets)}:{scene_device}"
         # A real device's MCU never misses its 1 ms tick; where allowed, the emulator gets a
         # real-time priority (below haptic-rt's 80) so a loaded CI machine does not fake link faults.
         p = self._start(name, [*FIFO, self.binary("haptic-fake-device"), "--rig", self.rig, "--device", device, "--motion",
@@ -371,15 +385,16 @@ class Stack:
         time.sleep(settle_s)
         return p
 
-    def sim(self, scene, name="sim", extra=(), backend="cpu"):
-        """haptic-sim --live on a shipped scene (a name) or a scene file; the cpu backend unless
+    def sim(self, scene, name="sim", extra=(), backend="cpu", every_cpu=False):
+        """haptic-sim --live on a scene (a name, scene_file(), or a file); the cpu backend unless
         asked (tests of other parts skip the ~1 s backend probe of `auto` and lavapipe's slower
-        steps; test_live_vulkan.py covers those)."""
-        scene_file = scene if isinstance(scene, pathlib.Path) else SCENES / f"{scene}.toml"
-        p = self._start(name, [self.binary("haptic-sim"), "--live", "--scene", scene_file,
-                               "--shm-prefix", self.prefix, "--out", self.dir / name, "--threads", "1",
+        steps; test_live_vulkan.py covers those). One thread off the loop's CPU, or with
+        every_cpu, as its systemd unit and `make run` place it: a thread per CPU, the loop's too."""
+        threads = str(len(self.own_cpus)) if every_cpu else "1"
+        p = self._start(name, [self.binary("haptic-sim"), "--live", "--scene", scene_file(scene),
+                               "--shm-prefix", self.prefix, "--out", self.dir / name, "--threads", threads,
                                "--backend", backend, "--status-every", str(SIM_STATUS_EVERY_S), *extra],
-                        nice=-5)  # as its systemd unit (Nice=-5)
+                        nice=-5, cpus=self.own_cpus if every_cpu else None)  # as its systemd unit (Nice=-5)
         self.wait_for(lambda: os.path.exists(f"/dev/shm/{self.prefix}.sim_samples") or p.poll() is not None, 30)
         assert p.poll() is None, f"haptic-sim stopped: {self.log(name)}"
         return p
@@ -388,9 +403,10 @@ class Stack:
         return self._start(name, [self.binary("haptic-sim-standin"), "--shm-prefix", self.prefix, *args], nice=nice)
 
     def render(self, scene, name="render"):
-        return self._start(name, [self.binary("haptic-render"), "--live", "--scene", SCENES / f"{scene}.toml",
+        return self._start(name, [self.binary("haptic-render"), "--live", "--scene", scene_file(scene),
                                   "--shm-prefix", self.prefix, "--headless", "--out", self.dir / "frames",
-                                  "--no-mp4", "--width", "320", "--height", "240"])
+                                  "--no-mp4", "--width", "320", "--height", "240"],
+                           idle=True)  # as its systemd unit (CPUSchedulingPolicy=idle)
 
     def stop(self, name, sig=signal.SIGINT, timeout=15):
         p = self.procs[name]

@@ -11,13 +11,13 @@ import time
 import numpy as np
 import pytest
 
-from hil_stack import (FAULT_SIM_STALE, FLAG_ENGAGING, LINK_FAULTS, SCENES, Stack, TraceFollower,
+from hil_stack import (FAULT_SIM_STALE, FLAG_ENGAGING, LINK_FAULTS, STIR as STIR_SCENE, Stack, TraceFollower,
                        assert_renders_the_sims_wrench, assert_within_limits, engaged, force, held_up, norm3, read_csv,
-                       runs, trace_time_s, wall_to_trace_s)
+                       runs, scene_file, trace_time_s, wall_to_trace_s)
 
 MAX_FORCE_N, MAX_TORQUE_NM = 8.0, 0.4
 STALE_PLUS_RAMP_S = 0.050 + 0.100
-STIR = f"scene:{SCENES / 'spoon_stirring.toml'}:hand"
+STIR = f"scene:{scene_file(STIR_SCENE)}:hand"
 
 
 @pytest.fixture
@@ -96,11 +96,11 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     # then rests with the spoon's load in its grip: the kill ramps a wrench the hand is feeling,
     # and the restarted sim's load settles and must be rendered, engaged, from fresh samples,
     # within RECOVERY_BOUND_S of its first sample.
-    scene = stack.scene_variant("spoon_stirring", "stroke-then-rest", stop_s=REST_AT_S - stack.lead_in_s)
+    scene = stack.scene_variant(STIR_SCENE, "stroke-then-rest", stop_s=REST_AT_S - stack.lead_in_s)
     stack.fake_device("hand", motion=f"scene:{scene}:hand")
     device_t0 = stack.started_at["fake-hand"]
     stack.rt()
-    stack.sim("spoon_stirring")
+    stack.sim(STIR_SCENE)
     sleep_until(device_t0 + REST_AT_S)
     follower = TraceFollower(stack.dir / "rt-trace.csv")
 
@@ -120,7 +120,7 @@ def test_a_killed_sim_ramps_the_wrench_to_zero_and_a_restarted_sim_is_rendered_a
     assert os.path.exists(f"/dev/shm/{stack.prefix}.sim_samples"), "a SIGKILLed writer cannot unlink"
     sleep_until(killed + DEAD_S)
     restarted_ns = time.monotonic_ns()
-    stack.sim("spoon_stirring", name="sim2")
+    stack.sim(STIR_SCENE, name="sim2")
     stack.wait_until_rendering(sim="sim2")
     codes = {n: stack.stop(n) for n in ("rt", "sim2", "fake-hand")}
     assert codes == {"rt": 0, "sim2": 0, "fake-hand": 0}
@@ -176,7 +176,7 @@ def test_a_silent_or_corrupting_device_faults_the_host_and_gets_zero_wrench(stac
     # latches a link fault and commands zero; nothing else stops.
     stack.fake_device("hand", motion=STIR, extra=fault)
     stack.rt()
-    stack.sim("spoon_stirring")
+    stack.sim(STIR_SCENE)
     time.sleep(2.5)
     codes = {n: stack.stop(n) for n in ("rt", "sim", "fake-hand")}
     assert codes == {"rt": 0, "sim": 0, "fake-hand": 0}
@@ -193,7 +193,7 @@ def test_a_dead_host_trips_the_fake_devices_own_watchdog(stack):
     # (device_watchdog_ms = 20) must switch its motors off (applied wrench zero).
     stack.fake_device("hand", motion=STIR)
     stack.rt()
-    stack.sim("spoon_stirring")
+    stack.sim(STIR_SCENE)
     time.sleep(2.0)
     dead_pid = stack.procs["rt"].pid
     stack.kill("rt")
@@ -227,7 +227,7 @@ def test_a_stalled_sim_fades_out_then_resumes_and_says_it_fell_behind(stack):
     # never silent) — and the wrench fades back in.
     stack.fake_device("hand", motion=STIR)
     stack.rt()
-    stack.sim("spoon_stirring")
+    stack.sim(STIR_SCENE)
     time.sleep(2.0)
     stopped = time.monotonic()
     stack.procs["sim"].send_signal(signal.SIGSTOP)

@@ -126,7 +126,10 @@ def test_the_csv_histories_have_their_columns_and_rows(rendered_run):
     assert len(device) > 2000 and {"t_s", "px", "applied_fx"} <= set(device[0])  # ~1 kHz for ~6 s
     couplings = csv_rows(out / "sim" / "couplings.csv")
     assert {"t", "device", "fx", "ty", "wall_s", "publish_ns"} <= set(couplings[0])
-    assert len(couplings) > 1000 and {r["device"] for r in couplings} == {"hand"}
+    stats = json.loads((out / "sim" / "stats.json").read_text())
+    # One row per sim step, as many as samples published to the loop (at least 60 a second).
+    assert len(couplings) == stats["sim_samples_published"] and {r["device"] for r in couplings} == {"hand"}
+    assert len(couplings) > 60 * stats["simulated_time_s"]
     bodies = csv_rows(out / "sim" / "bodies.csv")
     assert {r["body"] for r in bodies} == {"spoon"} and len(bodies) > 60  # 60 Hz rows
     plotted = csv_rows(out / "device_wrenches.csv")

@@ -19,7 +19,7 @@ def stirring(binary, tmp_path_factory):
     try:
         stack.fake_device("hand", motion=f"scene:{SCENES / 'spoon_stirring.toml'}:hand")
         stack.rt()
-        stack.sim("spoon_stirring")
+        stack.sim("spoon_stirring", every_cpu=True)
         stack.render("spoon_stirring")
         time.sleep(3.0)
         render_killed_at = time.monotonic()

@@ -14,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from hil_stack import (LINK_FAULTS, Stack, assert_renders_the_sims_wrench, assert_within_limits, force,
+from hil_stack import (LINK_FAULTS, STIR, Stack, assert_renders_the_sims_wrench, assert_within_limits, force,
                        last_kept_stretch, read_csv, trace_time_s, wall_to_trace_s)
 
 MAX_FORCE_N, MAX_TORQUE_NM = 8.0, 0.4
@@ -40,9 +40,9 @@ def start(stack, part, name=None):
     elif part == "rt":
         stack.rt(name=name or "rt")
     elif part == "sim":
-        stack.sim("spoon_stirring", name=name or "sim")
+        stack.sim(STIR, name=name or "sim")
     else:
-        stack.render("spoon_stirring", name=name or "render")
+        stack.render(STIR, name=name or "render")
 
 
 def bring_up(stack, order, gaps_s=itertools.repeat(0.0)):
