@@ -144,7 +144,7 @@ void BodySolveCoupling::add_forces(int slot, const SortedSolids& bodies, const P
   }
 }
 
-void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodies, ThreadPool& pool) {
+void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodies) {
   for (std::size_t b = 0; b < bodies_; ++b) {
     if (!dynamic_[b]) continue;
     for (int w = 0; w < slots_; ++w) {
@@ -157,20 +157,20 @@ void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodi
     const Vec6 step = times(relax_[b], gap);
     for (int k = 0; k < 6; ++k) u_[b][k] += step[k];
   }
+  // On the calling thread: a few flops per body particle, less than a hand-off to the pool costs
+  // (this runs at every iteration of both solves).
   BodyParticles& bp = m.body_particles;
-  pool.parallel_for(bodies.size(), [&](std::size_t begin, std::size_t end, int) {
-    for (std::size_t p = begin; p < end; ++p) {
-      const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
-      const Vec6& u = u_[b];
-      const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
-      const float vx = static_cast<float>(u[0] + u[4] * rz - u[5] * ry);
-      const float vy = static_cast<float>(u[1] + u[5] * rx - u[3] * rz);
-      const float vz = static_cast<float>(u[2] + u[3] * ry - u[4] * rx);
-      bodies.vx[p] = vx, bodies.vy[p] = vy, bodies.vz[p] = vz;
-      const std::uint32_t s = bodies.source[p];
-      bp.vx[s] = vx, bp.vy[s] = vy, bp.vz[s] = vz;
-    }
-  });
+  for (std::size_t p = 0; p < bodies.size(); ++p) {
+    const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
+    const Vec6& u = u_[b];
+    const double rx = bodies.x[p] - com_[3 * b], ry = bodies.y[p] - com_[3 * b + 1], rz = bodies.z[p] - com_[3 * b + 2];
+    const float vx = static_cast<float>(u[0] + u[4] * rz - u[5] * ry);
+    const float vy = static_cast<float>(u[1] + u[5] * rx - u[3] * rz);
+    const float vz = static_cast<float>(u[2] + u[3] * ry - u[4] * rx);
+    bodies.vx[p] = vx, bodies.vy[p] = vy, bodies.vz[p] = vz;
+    const std::uint32_t s = bodies.source[p];
+    bp.vx[s] = vx, bp.vy[s] = vy, bp.vz[s] = vz;
+  }
 }
 
 }  // namespace hapfluid::sim::detail

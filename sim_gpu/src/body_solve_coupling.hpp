@@ -56,7 +56,7 @@ class BodySolveCoupling {
 
   // After the increments are applied: the bodies' new predicted velocities, written to the
   // cell-sorted view (which the density rates read) and to the grouped body particles.
-  void update_velocities(SimulationModel& m, SortedSolids& bodies, ThreadPool& pool);
+  void update_velocities(SimulationModel& m, SortedSolids& bodies);
 
   // The force and torque (about the centre of mass) the current solve has put on the body.
   Vec6 solve_force(std::size_t body) const { return force_[body]; }

@@ -191,7 +191,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
       detail::apply_stiffness(fields_, lists_[w], ranges_.data(), b, e, dt);
       if (coupled_) coupling_->add_forces(w, body_view_, lists_[w], ranges_.data(), b, e, step);
     });
-    if (coupled_) coupling_->update_velocities(m_, body_view_, pool_);
+    if (coupled_) coupling_->update_velocities(m_, body_view_);
   };
   apply();
   int it = 0;
@@ -212,7 +212,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
     double sum = 0;
     for (double s : slot_error_) sum += s;
     mean_error = sum / static_cast<double>(n);
-    if (it >= ip.min_iterations && mean_error <= tolerance) break;
+    if (it >= (density ? ip.min_density_iterations : ip.min_divergence_iterations) && mean_error <= tolerance) break;
     apply();
   }
   // The last error pass's increments were not applied: take them back out of the total.
@@ -421,7 +421,7 @@ void DfsphSolver::start_density_coupling(double dt) {
     solve6(sys.a, sys.rhs, u.data());
     coupling_->start_solve(b, u);
   }
-  coupling_->update_velocities(m_, body_view_, pool_);
+  coupling_->update_velocities(m_, body_view_);
 }
 
 void DfsphSolver::body_forces_and_step(double dt) {

@@ -22,7 +22,11 @@ struct IncompressibleParams {
   CubicKernel kernel;
   float max_density_error = 0.001f;     // mean (rho* - rho0) / rho0 at which the density solve stops
   float max_divergence_error = 0.001f;  // mean |D rho / Dt| dt / rho0 at which the divergence solve stops
-  int min_iterations = 2;
+  // Error passes each solve takes at least: the density solve 2 (its first pass sees only the warm
+  // start), the divergence solve 1, as in Bender & Koschier's own implementation: the divergence
+  // left after the last step's density solve is mostly what its warm start removes.
+  int min_density_iterations = 2;
+  int min_divergence_iterations = 1;
   int max_iterations = 100;
   float xsph_fraction = 0;              // fluid.xsph_fraction
   double settle_s = 0;                  // fluid.settle_s
