@@ -2,8 +2,9 @@
 """hapfluid against SPlisHSPlasH's DFSPH on the same cases, one after the other (`make bench`).
 
 Cases: the Martin & Moyce dam break (config/scenes/dam_break.toml, its 0.6 s) and the 32k fluid
-pool of §6.2.1 (sim_gpu/bench/pool_32k.toml, its 0.2 s), each also as a `_dfsph` case
-(sim_gpu/bench/*_dfsph.toml: the same geometry on hapfluid's DFSPH at water's viscosity). Each scene file runs as it is through
+pool of §6.2.1 (sim_gpu/bench/pool_32k.toml, its 0.2 s), water on hapfluid's incompressible
+solver, each also as a `_wcsph` case (sim_gpu/bench/*_wcsph.toml: the same geometry on the paper's
+weakly compressible solver, the reference method). Each scene file runs as it is through
 `haptic-sim --backend cpu` (so whichever solver its fluid.solver selects) and, translated by
 splishsplash.py, through SPlisHSPlasH's `splash --no-gui` (the pysplishsplash wheel,
 `scripts/install-deps.sh bench`), both on the same number of threads.
@@ -43,8 +44,8 @@ ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {
     "dam_break": ROOT / "config/scenes/dam_break.toml",
     "pool_32k": ROOT / "sim_gpu/bench/pool_32k.toml",
-    "dam_break_dfsph": ROOT / "sim_gpu/bench/dam_break_dfsph.toml",
-    "pool_32k_dfsph": ROOT / "sim_gpu/bench/pool_32k_dfsph.toml",
+    "dam_break_wcsph": ROOT / "sim_gpu/bench/dam_break_wcsph.toml",
+    "pool_32k_wcsph": ROOT / "sim_gpu/bench/pool_32k_wcsph.toml",
 }
 # Cases judged by how still the fluid stays, not by cost (below).
 AT_REST_CASES = {
