@@ -412,10 +412,12 @@ int run_live(const LiveOptions& o, std::ostream& log) {
           }
         }
       }
+      const double dt = solver->stable_time_step();
       for (std::size_t d = 0; d < m.devices.size(); ++d) {
         const int i = live_device_of_scene[d];
         if (i >= 0 && input.live() && finite_entry(devices.devices[i])) {
-          held[d] = from_entry(devices.devices[i], centre[d]);
+          // Coupled at its pose at the step's end (coupling.hpp: device_state_after).
+          held[d] = device_state_after(from_entry(devices.devices[i], centre[d]), dt);
         } else if (i >= 0) {
           held[d].linear_velocity = {}, held[d].angular_velocity = {};  // no fresh pose: hold still
         } else {
@@ -426,7 +428,6 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         solver->set_device_state(d, held[d]);
       }
 
-      const double dt = solver->stable_time_step();
       const std::uint64_t step_start = shm::monotonic_ns();
       solver->step(dt);
       now = shm::monotonic_ns();

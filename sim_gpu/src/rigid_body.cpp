@@ -27,6 +27,12 @@ DeviceState device_state_from(const config::PoseTwist& t) {
           from_config(t.angular_velocity_rad_s)};
 }
 
+DeviceState device_state_after(DeviceState s, double dt) {
+  s.position = s.position + s.linear_velocity * dt;
+  s.orientation = normalized(rotation_from_vector(s.angular_velocity * dt) * s.orientation);
+  return s;
+}
+
 namespace {
 
 // Cross-product matrix [r]x, so that [r]x w = r x w.

@@ -764,6 +764,39 @@ TEST(Probe, AHeldProbeInAirRendersItsWeightAndNoTorque) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Probe, AHandDraggingItThroughAirFeelsNoSpringAtTheEndOfEachStep) {
+  // The 1 kHz loop renders each sample against the hand's pose until the next one: F = F0 -
+  // K (x - x0) + D (v0 - v) (rt/wrench_render.hpp). The implicit coupling holds the hand at x0
+  // through the step, so x0 must be where the hand is at the step's end (device_state_after, as
+  // haptic-sim --live gives it): then at that moment the hand feels F0, which for a probe dragged
+  // through air at constant speed is nothing. Held at its pose at the step's start, the sim lags
+  // a step behind and the hand feels the spring K v dt against its motion (0.04 N here). Within
+  // a tenth of that: the probe's leap-frog velocity is half a step off the hand's.
+  const auto dir = test::temp_dir("probe_drag");
+  const auto solver = make_cpu_solver(build_model(probe_scene(dir, "speed_of_sound_m_s = 10.0\n", "", false)), 1);
+  const VirtualCoupling& c = solver->model().couplings[0];
+  // 0.6 s at 0.1 m/s: 6 cm along the 20 cm box from its middle, clear of the far wall.
+  const double dt = 0.008, speed = 0.1, k = c.linear_stiffness_n_per_m, d = c.linear_damping_n_s_per_m;
+  DeviceState hand;  // at the start of each step
+  hand.position = solver->model().bodies[0].position;
+  hand.linear_velocity = {speed, 0, 0};
+  double worst = 0;
+  for (int step = 0; step < 75; ++step) {
+    const DeviceState coupled = device_state_after(hand, dt);
+    solver->set_device_state(0, coupled);
+    solver->step(dt);
+    hand.position = hand.position + hand.linear_velocity * dt;  // where the hand is when the step ends
+    if (step < 25) continue;                                     // the probe has caught up with it
+    const double felt = c.device_force.x - k * (hand.position.x - coupled.position.x) +
+                        d * (coupled.linear_velocity.x - hand.linear_velocity.x);
+    worst = std::max(worst, std::abs(felt));
+  }
+  std::cout << "probe dragged through air at " << speed << " m/s: largest force at a step's end " << worst
+            << " N (one step of lag: " << k * speed * dt << " N)\n";
+  EXPECT_LT(worst, 0.1 * k * speed * dt);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Probe, StrokedThroughTheFluidItRendersForceAgainstTheStrokeAndNoTorque) {
   // Algorithm 1 on both methods: the probe dragged back and forth by the device feels the
   // fluid's pressure and viscosity against its motion, and the device gets forces only.

@@ -24,6 +24,13 @@ struct DeviceState {
 };
 DeviceState device_state_from(const config::PoseTwist& twist);
 
+// The hand's pose dt later, moving on with its twist now. The coupling is implicit (below): it
+// pulls the body toward where it holds the hand at the step's end, so a live sim given a moving
+// hand's pose now lags it by a step, and the 1 kHz loop, which renders each sample against the
+// hand's pose until the next one, adds a spring force K v dt against the stroke (haptic-sim
+// --live couples the hand at its pose at the end of each step).
+DeviceState device_state_after(DeviceState state, double dt);
+
 struct VirtualCoupling {
   std::size_t device = 0;
   std::size_t body = 0;
