@@ -219,36 +219,31 @@ void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, co
 }
 
 HAPFLUID_CLONES
-void body_fluid_forces(const SimulationParams& p, const FluidParticles& f, const std::uint32_t* fluid_cell_start,
-                       const DfsphFields& d, BodyForcePart part, BodyParticles& bp, std::size_t begin, std::size_t end) {
-  const bool pressure = part == BodyForcePart::pressure;
-  const CubicKernel& k = p.incompressible.kernel;
-  const float mass = p.fluid_particle_mass_kg, inv_rho0 = 1.0f / p.rest_density_kg_m3, eps2 = 0.01f * k.h2;
-  for (std::size_t b = begin; b < end; ++b) {
-    const float xb = bp.x[b], yb = bp.y[b], zb = bp.z[b], vxb = bp.vx[b], vyb = bp.vy[b], vzb = bp.vz[b];
-    const float psi = bp.volume[b], mub = bp.viscosity[b];
-    float fx = 0, fy = 0, fz = 0;
-    for_each_neighbour_run(p.grid, fluid_cell_start, xb, yb, zb, [&](std::uint32_t s, std::uint32_t e) {
-      for (std::uint32_t j = s; j < e; ++j) {
-        const float dx = f.x[j] - xb, dy = f.y[j] - yb, dz = f.z[j] - zb;
-        const float r2 = dx * dx + dy * dy + dz * dz;
-        if (r2 >= k.h2) continue;
-        const float g = psi * cubic_grad_over_r(k, std::sqrt(r2));
-        float c;
-        if (pressure) {
-          // The opposite of the fluid's boundary term, with this step's stiffness of both solves.
-          c = mass * (d.density_stiffness[j] + d.divergence_stiffness[j]) * g;
-        } else {
-          const float pi = ((f.vx[j] - vxb) * dx + (f.vy[j] - vyb) * dy + (f.vz[j] - vzb) * dz) / (r2 + eps2);
-          c = -mass * kLaplacianFactor * 0.5f * (f.viscosity[j] + mub) * inv_rho0 * pi * g;
-        }
-        fx += c * dx, fy += c * dy, fz += c * dz;
+void body_pair_forces(const SimulationParams& p, const FluidParticles& f, const DfsphFields& d, const SortedSolids& bodies,
+                      BodyForcePart part, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                      std::size_t end, float* sums) {
+  const float mass = p.fluid_particle_mass_kg, eps2 = 0.01f * p.incompressible.kernel.h2;
+  const float viscous_scale = -mass * kLaplacianFactor * 0.5f / p.rest_density_kg_m3;
+  std::fill(sums, sums + 3 * bodies.size(), 0.0f);
+  const std::uint32_t* list = lists.index.data();
+  const Packed4* term = lists.term.data();
+  for (std::size_t i = begin; i < end; ++i) {
+    const PairRange& r = ranges[i];
+    if (r.bodies == 0) continue;
+    const std::uint32_t first = r.offset + r.fluid + r.statics;
+    for (std::uint32_t q = first; q < first + r.bodies; ++q) {
+      const std::uint32_t b = list[q];
+      float c;
+      if (part == BodyForcePart::pressure) {
+        // The opposite of the fluid's boundary term, with this step's stiffness of both solves.
+        c = mass * (d.density_stiffness[i] + d.divergence_stiffness[i]);
+      } else {
+        const float dx = f.x[i] - bodies.x[b], dy = f.y[i] - bodies.y[b], dz = f.z[i] - bodies.z[b];
+        const float pi = ((f.vx[i] - bodies.vx[b]) * dx + (f.vy[i] - bodies.vy[b]) * dy + (f.vz[i] - bodies.vz[b]) * dz) /
+                         (dx * dx + dy * dy + dz * dz + eps2);
+        c = viscous_scale * (f.viscosity[i] + bodies.viscosity[b]) * pi;
       }
-    });
-    if (pressure) {
-      bp.fx[b] += fx, bp.fy[b] += fy, bp.fz[b] += fz;
-    } else {
-      bp.fx[b] = fx, bp.fy[b] = fy, bp.fz[b] = fz;
+      sums[3 * b] += c * term[q].x, sums[3 * b + 1] += c * term[q].y, sums[3 * b + 2] += c * term[q].z;
     }
   }
 }

@@ -37,12 +37,14 @@ void non_pressure_accelerations(const SimulationParams& p, FluidParticles& f, co
                                 const PairLists& lists, const PairRange* ranges, std::size_t begin, std::size_t end,
                                 float dt);
 
-// Force of the fluid on the dynamic body particles [begin, end) (fx, fy, fz): the opposite of the
-// terms each fluid neighbour received from them. The viscous part is written with the velocities
-// the viscosity solve ended on (right after it); the pressure part, this step's total
-// stiffness of both solves, is added after the solves.
+// Force of the fluid on the dynamic body particles: the opposite of the terms the fluid
+// particles [begin, end) received from them, read from their pair lists into `sums` (3 per
+// particle of the cell-sorted body view, this slot's own, zeroed first; the caller adds the
+// slots). The viscous part is taken with the velocities the viscosity solve ended on (right
+// after it); the pressure part, this step's total stiffness of both solves, after the solves.
 enum class BodyForcePart { viscous, pressure };
-void body_fluid_forces(const SimulationParams& p, const FluidParticles& f, const std::uint32_t* fluid_cell_start,
-                       const DfsphFields& d, BodyForcePart part, BodyParticles& bodies, std::size_t begin, std::size_t end);
+void body_pair_forces(const SimulationParams& p, const FluidParticles& f, const DfsphFields& d, const SortedSolids& bodies,
+                      BodyForcePart part, const PairLists& lists, const PairRange* ranges, std::size_t begin,
+                      std::size_t end, float* sums);
 
 }  // namespace hapfluid::sim::detail

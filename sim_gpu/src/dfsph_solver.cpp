@@ -62,6 +62,7 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads)
   slot_dots_.assign(2 * slots, 0);
   slot_clamped_.assign(slots, 0);
   slot_touching_.assign(slots, 0);
+  slot_body_force_.assign(3 * m_.body_particles.size() * static_cast<std::size_t>(slots), 0.0f);
   detail::set_body_particle_velocities(m_);
   coupling_->init(m_, slots);
   const SimulationParams& p = m_.params;
@@ -272,14 +273,31 @@ void DfsphSolver::non_pressure_forces(float dt) {
   iterations_.viscosity_iterations += static_cast<std::uint64_t>(viscosity_solve(dt));
 }
 
-// The bodies' share of the viscous pair terms, from the fluid velocities the fluid's own terms
-// were evaluated at, so that what the fluid gains the bodies lose.
-void DfsphSolver::body_viscous_forces() {
-  if (m_.body_particles.size() == 0) return;
-  pool_.parallel_for(m_.body_particles.size(), [&](std::size_t b, std::size_t e, int) {
-    detail::body_fluid_forces(m_.params, m_.fluid, fluid_sort_.cell_start.data(), fields_,
-                              detail::BodyForcePart::viscous, m_.body_particles, b, e);
+// The fluid's force on each body particle, from the pair lists: each slot sums what its fluid
+// particles' pairs give, then the slots are added in order (the same sums for any thread count).
+// The viscous part is written, the pressure part added to it.
+void DfsphSolver::body_fluid_forces(detail::BodyForcePart part) {
+  BodyParticles& bp = m_.body_particles;
+  const std::size_t nb = body_view_.size();
+  if (nb == 0) return;
+  pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int slot) {
+    detail::body_pair_forces(m_.params, m_.fluid, fields_, body_view_, part, lists_[slot], ranges_.data(), b, e,
+                             slot_body_force_.data() + 3 * nb * static_cast<std::size_t>(slot));
   });
+  const bool add = part == detail::BodyForcePart::pressure;
+  for (std::size_t q = 0; q < nb; ++q) {
+    float fx = 0, fy = 0, fz = 0;
+    for (int slot = 0; slot < pool_.slots(); ++slot) {
+      const float* s = slot_body_force_.data() + 3 * (nb * static_cast<std::size_t>(slot) + q);
+      fx += s[0], fy += s[1], fz += s[2];
+    }
+    const std::uint32_t i = body_view_.source[q];
+    if (add) {
+      bp.fx[i] += fx, bp.fy[i] += fy, bp.fz[i] += fz;
+    } else {
+      bp.fx[i] = fx, bp.fy[i] = fy, bp.fz[i] = fz;
+    }
+  }
 }
 
 // Preconditioned conjugate gradients (Jacobi) on K v = b, started from the velocities after
@@ -291,7 +309,7 @@ int DfsphSolver::viscosity_solve(float dt) {
   bool any = m_.params.fluid_viscosity_pa_s > 0;
   for (const RigidBody& b : m_.bodies) any = any || b.viscosity_pa_s > 0;
   if (!any) {
-    body_viscous_forces();
+    body_fluid_forces(detail::BodyForcePart::viscous);
     return 0;
   }
   detail::DfsphFields& d = fields_;
@@ -332,7 +350,7 @@ int DfsphSolver::viscosity_solve(float dt) {
   double lambda = 0;
   for (int w = 0; w < pool_.slots(); ++w) lambda = std::max(lambda, 2.0 * std::sqrt(3.0) * slot_error_[w]);
   if (lambda * lambda <= kViscosityTolerance) {
-    body_viscous_forces();
+    body_fluid_forces(detail::BodyForcePart::viscous);
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
       for (std::size_t i = b; i < e; ++i) f.vx[i] += d.cg_rx[i], f.vy[i] += d.cg_ry[i], f.vz[i] += d.cg_rz[i];
     });
@@ -391,7 +409,7 @@ int DfsphSolver::viscosity_solve(float dt) {
     });
   }
   if (it >= max_iterations && rr > limit) ++iterations_.unconverged_solves;
-  body_viscous_forces();
+  body_fluid_forces(detail::BodyForcePart::viscous);
   return it;
 }
 
@@ -425,12 +443,7 @@ void DfsphSolver::start_density_coupling(double dt) {
 }
 
 void DfsphSolver::body_forces_and_step(double dt) {
-  BodyParticles& bp = m_.body_particles;
-  if (bp.size() > 0)
-    pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int) {
-      detail::body_fluid_forces(m_.params, m_.fluid, fluid_sort_.cell_start.data(), fields_, detail::BodyForcePart::pressure,
-                                bp, b, e);
-    });
+  body_fluid_forces(detail::BodyForcePart::pressure);
   detail::step_bodies(m_, couplings_of_body_, devices_, dt, pool_);
 }
 

@@ -85,6 +85,7 @@ struct DfsphFields {
 };
 
 class BodySolveCoupling;
+enum class BodyForcePart;
 
 }  // namespace detail
 
@@ -121,7 +122,7 @@ class DfsphSolver final : public Solver {
   // The viscosity solve on the velocities after gravity and XSPH, then the bodies' viscous
   // forces; returns CG iterations (0 for an explicit step).
   int viscosity_solve(float dt);
-  void body_viscous_forces();
+  void body_fluid_forces(detail::BodyForcePart part);
   void density_solve(float dt);
   // Contacts between solids, from the positions at the start of the step.
   void body_contacts();
@@ -153,6 +154,7 @@ class DfsphSolver final : public Solver {
   std::vector<double> slot_dots_;  // 2 per slot
   std::vector<std::uint64_t> slot_clamped_;
   std::vector<char> slot_touching_;
+  std::vector<float> slot_body_force_;  // 3 per body particle per slot (body_fluid_forces)
   bool bodies_touching_ = false;
   bool settling_ = false;
   double time_s_ = 0;
