@@ -12,7 +12,7 @@
 namespace hapfluid::sim::detail {
 namespace {
 
-// Appends the candidates of the cells around (xi, yi, zi) that lie within h to the worker's lists,
+// Appends the candidates of the cells around (xi, yi, zi) that lie within h to the slot's lists,
 // their offsets x_i - x_j to its scratch from `first` on (neighbour_filter.hpp). Returns how many.
 std::uint32_t collect(FilterFn filter, const GridGeometry& g, const std::uint32_t* cell_start, const float* x,
                       const float* y, const float* z, float xi, float yi, float zi, float h2, std::uint32_t first,
@@ -110,12 +110,12 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
   // A factor denominator this small means a particle with (almost) no neighbours: it gets no
   // pressure rather than a division by zero.
   const float tiny = 1e-6f / h2;
+  const FilterFn filter = neighbour_filter();
   lists.used = 0;
   for (std::size_t i = begin; i < end; ++i) {
     const float xi = f.x[i], yi = f.y[i], zi = f.z[i];
     PairRange& r = ranges[i];
     r.offset = static_cast<std::uint32_t>(lists.used);
-    const FilterFn filter = neighbour_filter();
     const std::uint32_t nf =
         collect(filter, p.grid, fluid_cell_start, f.x.data(), f.y.data(), f.z.data(), xi, yi, zi, h2, 0, lists);
     const std::uint32_t ns = st.size() > 0 ? collect(filter, p.grid, st.cell_start.data(), st.x.data(), st.y.data(),

@@ -4,7 +4,7 @@
 // The density pass walks the 27 grid cells around each fluid particle (about 8 times more
 // candidates than neighbours at h = 2 spacings), sums eq. 2 over them and keeps the candidates
 // within h in a neighbour list; the force pass then visits only true neighbours. Lists live in
-// one buffer per worker: the static split gives a worker the same particles in both passes.
+// one buffer per slot of the thread pool: a slot covers the same particles in both passes.
 #pragma once
 
 #include <cstddef>

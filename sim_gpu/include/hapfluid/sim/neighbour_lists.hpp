@@ -1,6 +1,6 @@
 // Per-particle neighbour lists of the CPU backend: the density pass keeps the candidates within
 // h of each fluid particle (fluid, then static solids, then dynamic body particles) and their
-// distances, so the force pass visits only true neighbours. One buffer per worker thread.
+// distances, so the force pass visits only true neighbours. One buffer per slot of the thread pool.
 #pragma once
 
 #include <cstddef>
@@ -10,7 +10,7 @@
 namespace hapfluid::sim::detail {
 
 struct NeighbourRange {
-  std::uint32_t offset = 0;   // into the worker's buffer
+  std::uint32_t offset = 0;   // into the slot's buffer
   std::uint16_t fluid = 0;    // fluid neighbours, then
   std::uint16_t statics = 0;  // static solid neighbours, then
   std::uint16_t bodies = 0;   // dynamic body neighbours
