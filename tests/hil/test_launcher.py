@@ -68,6 +68,10 @@ def test_a_short_live_run_leaves_its_outputs_and_nothing_else(build_dir, tmp_pat
     assert summary["build_id"] == json.loads((out / "sim/stats.json").read_text())["build_id"]
     assert "p99" in summary["wake_latency_us"]
     assert "steps/s" in result.stdout and "wake latency" in result.stdout and "max force on the hand" in result.stdout
+    # The sim's headroom: the steps' share of its wall clock (stats.json step_load), in (0, 1]
+    # (a step that outlasts the run's wall clock cannot happen), printed beside the real-time factor.
+    assert 0 < summary["sim_step_load"] <= 1.0
+    assert f"{summary['sim_step_load']:.0%} of the wall clock" in result.stdout
     # --no-cyclictest: the loop's latency alone, said so; no cyclictest output left behind.
     assert summary["cyclictest_us"] is None and "no cyclictest" in result.stdout
     assert not (out / "cyclictest.txt").exists()
