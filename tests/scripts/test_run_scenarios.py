@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+import tomllib
 
 import matplotlib.image
 import pytest
@@ -33,10 +34,14 @@ def test_the_stirring_scenario_checks_that_the_force_opposes_the_stroke(stirring
     assert "stirring  holds" in result.stdout and "the force opposes the stroke" in result.stdout
 
 
-def test_the_table_has_the_sim_rate_real_time_factor_and_loop_latency_per_scene(stirring):
+def test_the_table_has_the_sim_rate_real_time_factor_and_loop_latency_per_scene(stirring, source_dir):
     out, result = stirring
     row = json.loads((out / "scenarios.json").read_text())["scenes"]["spoon_stirring"]
-    assert row["ok"] and row["sim_steps_per_s"] > 100 and 0 < row["real_time_factor"] <= 1.1
+    # The sim stepped (its rate is a benchmark's business: here at least a quarter of real time at
+    # the scene's longest step).
+    with (source_dir / "config/scenes/spoon_stirring.toml").open("rb") as f:
+        max_dt = tomllib.load(f)["time"]["max_dt_s"]
+    assert row["ok"] and row["sim_steps_per_s"] > 0.25 / max_dt and 0 < row["real_time_factor"] <= 1.1
     assert row["wake_latency_us"]["p99"] > 0 and row["max_force_on_hand_n"]["hand"] > 0.3
     header = next(l for l in result.stdout.splitlines() if l.startswith("scene"))
     assert "steps/s" in header and "RT factor" in header and "wake p50/p99/max" in header and "cyclictest" in header
