@@ -21,7 +21,12 @@ def stirring(binary, tmp_path_factory):
         stack.rt()
         stack.sim("spoon_stirring", every_cpu=True)
         stack.render("spoon_stirring")
-        time.sleep(3.0)
+        started = time.monotonic()
+        # Killed once it has drawn (at nice 19 beside a busy machine its first frame can take a
+        # while), and no earlier than 3 s in.
+        stack.wait_until("the renderer's first frame", lambda: (stack.dir / "frames" / "frame_000000.png").exists(),
+                         watch=("render", "sim", "rt"))
+        time.sleep(max(0.0, 3.0 - (time.monotonic() - started)))
         render_killed_at = time.monotonic()
         stack.kill("render")
         time.sleep(STIR_S - 3.0)
