@@ -1,13 +1,41 @@
 #include "body_contacts.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "hapfluid/sim/contact_damping.hpp"
 
 namespace hapfluid::sim::detail {
 
+void BodyReach::resize(std::size_t bodies) {
+  lo_.assign(3 * bodies, 0.0f);
+  hi_.assign(3 * bodies, 0.0f);
+  near_.assign(bodies, 0);
+}
+
+void BodyReach::update(const BodyParticles& bp, float reach) {
+  const std::size_t bodies = near_.size();
+  std::fill(lo_.begin(), lo_.end(), 1e30f);
+  std::fill(hi_.begin(), hi_.end(), -1e30f);
+  for (std::size_t i = 0; i < bp.size(); ++i) {
+    const std::size_t b = 3 * static_cast<std::size_t>(bp.body[i]);
+    const float at[3] = {bp.x[i], bp.y[i], bp.z[i]};
+    for (int a = 0; a < 3; ++a) lo_[b + a] = std::min(lo_[b + a], at[a]), hi_[b + a] = std::max(hi_[b + a], at[a]);
+  }
+  // Not "no overlap" but "overlap", so that a NaN position keeps the search on.
+  auto apart = [&](std::size_t a, std::size_t b) {
+    for (int k = 0; k < 3; ++k)
+      if (lo_[3 * a + k] > hi_[3 * b + k] + reach || lo_[3 * b + k] > hi_[3 * a + k] + reach) return true;
+    return false;
+  };
+  for (std::size_t a = 0; a < bodies; ++a) {
+    near_[a] = 0;
+    for (std::size_t b = 0; b < bodies && !near_[a]; ++b) near_[a] = b != a && !apart(a, b) ? 1 : 0;
+  }
+}
+
 void body_contact_pressure(const SimulationParams& p, const SortedSolids& st, SortedSolids& bv, BodyParticles& bodies,
-                           std::size_t begin, std::size_t end) {
+                           const BodyReach& reach, std::size_t begin, std::size_t end) {
   const KernelConstants& k = p.kernel;
   for (std::size_t q = begin; q < end; ++q) {
     const float xi = bv.x[q], yi = bv.y[q], zi = bv.z[q];
@@ -19,13 +47,14 @@ void body_contact_pressure(const SimulationParams& p, const SortedSolids& st, So
         sum += st.volume[j] * poly6_shape(k, dx * dx + dy * dy + dz * dz);
       }
     });
-    for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t j = b; j < e; ++j) {
-        if (bv.body[j] == own) continue;
-        const float dx = xi - bv.x[j], dy = yi - bv.y[j], dz = zi - bv.z[j];
-        sum += bv.volume[j] * poly6_shape(k, dx * dx + dy * dy + dz * dz);
-      }
-    });
+    if (reach.near_other(own))
+      for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t j = b; j < e; ++j) {
+          if (bv.body[j] == own) continue;
+          const float dx = xi - bv.x[j], dy = yi - bv.y[j], dz = zi - bv.z[j];
+          sum += bv.volume[j] * poly6_shape(k, dx * dx + dy * dy + dz * dz);
+        }
+      });
     const float pressure = p.stiffness * p.rest_density_kg_m3 * k.poly6 * sum;
     bv.pressure[q] = pressure;
     bodies.pressure[bv.source[q]] = pressure;
@@ -33,7 +62,7 @@ void body_contact_pressure(const SimulationParams& p, const SortedSolids& st, So
 }
 
 bool body_contact_forces(const SimulationParams& p, const SortedSolids& st, const SortedSolids& bv, BodyParticles& bp,
-                         std::size_t begin, std::size_t end) {
+                         const BodyReach& reach, std::size_t begin, std::size_t end) {
   const KernelConstants& k = p.kernel;
   const float damping_scale = p.contact_damping_pa_s;
   bool touching = false;
@@ -64,10 +93,11 @@ bool body_contact_forces(const SimulationParams& p, const SortedSolids& st, cons
     for_each_neighbour_run(p.grid, st.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
       for (std::uint32_t j = b; j < e; ++j) pair(st, j, xi, yi, zi, vxi, vyi, vzi, pb, pb, mui, cx, cy, cz);
     });
-    for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
-      for (std::uint32_t j = b; j < e; ++j)
-        if (bv.body[j] != own) pair(bv, j, xi, yi, zi, vxi, vyi, vzi, pb, bv.pressure[j], mui, cx, cy, cz);
-    });
+    if (reach.near_other(own))
+      for_each_neighbour_run(p.grid, bv.cell_start.data(), xi, yi, zi, [&](std::uint32_t b, std::uint32_t e) {
+        for (std::uint32_t j = b; j < e; ++j)
+          if (bv.body[j] != own) pair(bv, j, xi, yi, zi, vxi, vyi, vzi, pb, bv.pressure[j], mui, cx, cy, cz);
+      });
     bp.cx[i] = cx * vol;
     bp.cy[i] = cy * vol;
     bp.cz[i] = cz * vol;

@@ -29,6 +29,7 @@ CpuSolver::CpuSolver(SimulationModel model, int threads) : m_(std::move(model)),
   slot_max_accel_.assign(pool_.slots(), 0);
   slot_clamped_.assign(pool_.slots(), 0);
   neighbour_lists_.resize(pool_.slots());
+  body_reach_.resize(m_.bodies.size());
   // Density and pressure of the initial state, so that a frame exported before the first step
   // shows them (the step recomputes them from the same positions).
   sort_fluid();
@@ -130,7 +131,7 @@ void CpuSolver::compute_body_particle_forces(std::size_t begin, std::size_t end)
     bp.fy[i] = fy * vol;
     bp.fz[i] = fz * vol;
   }
-  detail::body_contact_forces(p, m_.static_solids, body_view_, bp, begin, end);
+  detail::body_contact_forces(p, m_.static_solids, body_view_, bp, body_reach_, begin, end);
 }
 
 // Leap-frog (Algorithm 1, lines 13-16): v(t + dt/2) = v(t - dt/2) + a dt, x(t + dt) = x + v dt.
@@ -173,10 +174,12 @@ void CpuSolver::step(double dt) {
   t0 = Clock::now();
   neighbour_ranges_.resize(m_.fluid.size());
   pool_.parallel_for(m_.fluid.size(), [&](std::size_t b, std::size_t e, int w) { compute_density(b, e, w); });
-  if (body_view_.size() > 0)
+  if (body_view_.size() > 0) {
+    body_reach_.update(m_.body_particles, m_.params.kernel.h);
     pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
-      detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, m_.body_particles, b, e);
+      detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, m_.body_particles, body_reach_, b, e);
     });
+  }
   times_.density_s += seconds_since(t0);
 
   t0 = Clock::now();

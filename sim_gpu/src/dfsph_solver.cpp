@@ -62,6 +62,7 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads)
   slot_dots_.assign(2 * slots, 0);
   slot_clamped_.assign(slots, 0);
   slot_touching_.assign(slots, 0);
+  body_reach_.resize(m_.bodies.size());
   slot_body_force_.assign(3 * m_.body_particles.size() * static_cast<std::size_t>(slots), 0.0f);
   detail::set_body_particle_velocities(m_);
   coupling_->init(m_, slots);
@@ -417,11 +418,12 @@ void DfsphSolver::body_contacts() {
   BodyParticles& bp = m_.body_particles;
   if (bp.size() == 0) return;
   std::fill(slot_touching_.begin(), slot_touching_.end(), 0);
+  body_reach_.update(bp, m_.params.kernel.h);
   pool_.parallel_for(body_view_.size(), [&](std::size_t b, std::size_t e, int) {
-    detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, bp, b, e);
+    detail::body_contact_pressure(m_.params, m_.static_solids, body_view_, bp, body_reach_, b, e);
   });
   pool_.parallel_for(bp.size(), [&](std::size_t b, std::size_t e, int w) {
-    slot_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, b, e) ? 1 : 0;
+    slot_touching_[w] = detail::body_contact_forces(m_.params, m_.static_solids, body_view_, bp, body_reach_, b, e) ? 1 : 0;
   });
   bodies_touching_ = std::any_of(slot_touching_.begin(), slot_touching_.end(), [](char c) { return c != 0; });
 }

@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "hapfluid/sim/body_reach.hpp"
 #include "hapfluid/sim/model.hpp"
 #include "hapfluid/sim/neighbour_lists.hpp"
 #include "hapfluid/sim/solver.hpp"
@@ -53,6 +54,7 @@ class CpuSolver final : public Solver {
   ThreadPool pool_;
   CellSort fluid_sort_, body_sort_;
   SortedSolids body_view_;  // dynamic body particles sorted by cell (rebuilt each step)
+  detail::BodyReach body_reach_;
   std::vector<DeviceState> devices_;
   std::vector<std::vector<VirtualCoupling*>> couplings_of_body_;
   std::vector<float> slot_max_accel_;

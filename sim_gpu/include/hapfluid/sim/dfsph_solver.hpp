@@ -30,6 +30,7 @@
 #include <memory>
 #include <vector>
 
+#include "hapfluid/sim/body_reach.hpp"
 #include "hapfluid/sim/model.hpp"
 #include "hapfluid/sim/neighbour_grid.hpp"
 #include "hapfluid/sim/solver.hpp"
@@ -139,6 +140,7 @@ class DfsphSolver final : public Solver {
   ThreadPool pool_;
   CellSort fluid_sort_, body_sort_;
   SortedSolids body_view_;
+  detail::BodyReach body_reach_;
   // The fluid's static solids: the static bodies' particles. The domain walls are the volume map
   // (their particles stay in the model for body contacts and outputs).
   SortedSolids fluid_statics_;
