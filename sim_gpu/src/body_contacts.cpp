@@ -20,9 +20,13 @@ void BodyReach::update(const BodyParticles& bp, float reach) {
   for (std::size_t i = 0; i < bp.size(); ++i) {
     const std::size_t b = 3 * static_cast<std::size_t>(bp.body[i]);
     const float at[3] = {bp.x[i], bp.y[i], bp.z[i]};
-    for (int a = 0; a < 3; ++a) lo_[b + a] = std::min(lo_[b + a], at[a]), hi_[b + a] = std::max(hi_[b + a], at[a]);
+    // A position that is not finite spans everything: the search stays on.
+    const bool finite = std::isfinite(at[0]) && std::isfinite(at[1]) && std::isfinite(at[2]);
+    for (int a = 0; a < 3; ++a) {
+      lo_[b + a] = std::min(lo_[b + a], finite ? at[a] : -1e30f);
+      hi_[b + a] = std::max(hi_[b + a], finite ? at[a] : 1e30f);
+    }
   }
-  // Not "no overlap" but "overlap", so that a NaN position keeps the search on.
   auto apart = [&](std::size_t a, std::size_t b) {
     for (int k = 0; k < 3; ++k)
       if (lo_[3 * a + k] > hi_[3 * b + k] + reach || lo_[3 * b + k] > hi_[3 * a + k] + reach) return true;

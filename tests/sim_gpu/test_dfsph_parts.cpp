@@ -133,3 +133,29 @@ TEST(SolverChoice, TheSceneKeyPicksTheMethod) {
   }
   std::filesystem::remove_all(dir);
 }
+
+// The contact passes search other bodies' particles only for bodies within a support radius of
+// one: two bodies 2 h apart are alone, 0.9 h apart near each other, and a body whose position
+// is not finite counts as near (the search stays on rather than missing a contact).
+TEST(BodyReach, BodiesWithinTheSupportRadiusOfAnotherAreNear) {
+  const float h = 0.02f;
+  BodyParticles bp;
+  bp.resize(4);
+  const float x[4] = {0.0f, 0.01f, 0.01f + 2 * h, 0.03f + 2 * h};
+  for (int i = 0; i < 4; ++i) bp.x[i] = x[i], bp.y[i] = 0, bp.z[i] = 0, bp.body[i] = i < 2 ? 0 : 1;
+  detail::BodyReach reach;
+  reach.resize(3);  // body 2 has no particles
+  reach.update(bp, h);
+  EXPECT_FALSE(reach.near_other(0));
+  EXPECT_FALSE(reach.near_other(1));
+  EXPECT_FALSE(reach.near_other(2));
+  bp.x[2] = 0.01f + 0.9f * h;
+  reach.update(bp, h);
+  EXPECT_TRUE(reach.near_other(0));
+  EXPECT_TRUE(reach.near_other(1));
+  EXPECT_FALSE(reach.near_other(2));
+  bp.x[2] = 0.01f + 2 * h;
+  bp.y[3] = std::nanf("");
+  reach.update(bp, h);
+  EXPECT_TRUE(reach.near_other(1));
+}
