@@ -54,40 +54,61 @@ ThreadPool::~ThreadPool() {
   for (auto& t : helpers_) t.join();
 }
 
-void ThreadPool::take_slots() {
-  for (int s = next_slot_.fetch_add(1, std::memory_order_relaxed); s < slots_;
-       s = next_slot_.fetch_add(1, std::memory_order_relaxed)) {
+namespace {
+constexpr std::uint64_t kSlotMask = 0xffffffffu;
+std::uint64_t tag(unsigned long generation) { return (static_cast<std::uint64_t>(generation) & kSlotMask) << 32; }
+}  // namespace
+
+void ThreadPool::take_slots(unsigned long generation, bool caller) {
+  const std::uint64_t mine = tag(generation);
+  for (;;) {
+    std::uint64_t v = next_.load(std::memory_order_acquire);
+    do {
+      if ((v & ~kSlotMask) != mine || static_cast<int>(v & kSlotMask) >= slots_) return;
+    } while (!next_.compare_exchange_weak(v, v + 1, std::memory_order_acq_rel, std::memory_order_acquire));
+    const int s = static_cast<int>(v & kSlotMask);
     std::size_t begin, end;
     chunk(count_, slots_, s, begin, end);
     (*job_)(begin, end, s);
+    if (finished_.fetch_add(1, std::memory_order_acq_rel) + 1 == slots_ && !caller) {
+      // The caller may be asleep on done_cv_: take the mutex so the wake-up cannot fall between
+      // its check and its wait.
+      std::lock_guard lock(mutex_);
+      done_cv_.notify_one();
+    }
   }
 }
 
 void ThreadPool::run(std::size_t count, const Job& fn) {
-  job_ = &fn;
-  count_ = count;
-  next_slot_.store(0, std::memory_order_relaxed);
   if (threads_ == 1) {
-    take_slots();
+    for (int s = 0; s < slots_; ++s) {
+      std::size_t begin, end;
+      chunk(count, slots_, s, begin, end);
+      fn(begin, end, s);
+    }
     return;
   }
-  pending_.store(threads_ - 1, std::memory_order_relaxed);
+  job_ = &fn;
+  count_ = count;
+  finished_.store(0, std::memory_order_relaxed);
+  const unsigned long generation = generation_.load(std::memory_order_relaxed) + 1;
+  next_.store(tag(generation), std::memory_order_release);
   {
     // Under the mutex, so that a helper about to sleep either sees the new generation or is
     // already waiting when it is notified.
     std::lock_guard lock(mutex_);
-    generation_.fetch_add(1, std::memory_order_release);
+    generation_.store(generation, std::memory_order_release);
   }
   start_cv_.notify_all();
-  take_slots();
-  auto all_done = [this] { return pending_.load(std::memory_order_acquire) == 0; };
+  take_slots(generation, true);
+  auto all_done = [this] { return finished_.load(std::memory_order_acquire) == slots_; };
   if (!spin_until(all_done, kSpinNs)) {
     std::unique_lock lock(mutex_);
     done_cv_.wait(lock, all_done);
   }
 }
 
-void ThreadPool::worker_loop(int w) {
+void ThreadPool::worker_loop(int) {
   unsigned long seen = 0;
   for (;;) {
     auto next = [&] {
@@ -99,13 +120,7 @@ void ThreadPool::worker_loop(int w) {
     }
     if (stopping_.load()) return;
     seen = generation_.load(std::memory_order_acquire);
-    take_slots();
-    if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
-      // The caller may be asleep on done_cv_: take the mutex so the wake-up cannot fall between
-      // its check and its wait.
-      std::lock_guard lock(mutex_);
-      done_cv_.notify_one();
-    }
+    take_slots(seen, false);
   }
 }
 

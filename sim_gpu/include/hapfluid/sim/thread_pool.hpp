@@ -9,12 +9,16 @@
 // A DFSPH step hands out a hundred or more short jobs (every solver iteration is two), so a
 // hand-off must cost far less than a futex wake-up: helpers and the caller spin for a short
 // while (kSpinNs) on an atomic generation and count before they sleep on a condition variable.
-// Between steps, and in a live sim waiting for the wall clock, the helpers sleep.
+// Between steps, and in a live sim waiting for the wall clock, the helpers sleep. A job is done
+// when its slots are, not when every helper has looked at it: a helper the scheduler has parked
+// (the live sim shares its cores with the 1 kHz loop and the devices) cannot hold up a job whose
+// slots the others have taken, so the caller never waits for a wake-up that brings no work.
 #pragma once
 
 #include <atomic>
 #include <condition_variable>
 #include <cstddef>
+#include <cstdint>
 #include <mutex>
 #include <type_traits>
 #include <thread>
@@ -68,8 +72,8 @@ class ThreadPool {
     void operator()(std::size_t begin, std::size_t end, int slot) const { call(fn, begin, end, slot); }
   };
   void run(std::size_t count, const Job& job);
-  // Runs slots of the current job until none is left.
-  void take_slots();
+  // Runs slots of job `generation` until none is left (or that job has been replaced).
+  void take_slots(unsigned long generation, bool caller);
   void worker_loop(int w);
 
   // How long a helper waits for the next job, or the caller for the helpers, before sleeping.
@@ -80,12 +84,14 @@ class ThreadPool {
   std::vector<std::thread> helpers_;
   std::mutex mutex_;
   std::condition_variable start_cv_, done_cv_;
-  // job_ and count_ are written before generation_ is released and read after it is acquired.
+  // job_ and count_ are written before next_ is released with the job's generation, and read
+  // only by a thread that has claimed a slot of that generation from next_; the caller writes
+  // the next job only once every slot has been counted in finished_.
   const Job* job_ = nullptr;
   std::size_t count_ = 0;
-  std::atomic<int> next_slot_{0};
-  std::atomic<unsigned long> generation_{0};
-  std::atomic<int> pending_{0};
+  std::atomic<std::uint64_t> next_{0};        // (generation << 32) | next free slot
+  std::atomic<int> finished_{0};              // slots of the current job done
+  std::atomic<unsigned long> generation_{0};  // wakes the helpers
   std::atomic<bool> stopping_{false};
 };
 
