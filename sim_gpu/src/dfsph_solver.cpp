@@ -262,12 +262,16 @@ void DfsphSolver::non_pressure_forces(float dt) {
     detail::non_pressure_accelerations(m_.params, f, fields_, lists_[w], ranges_.data(), b, e, dt);
   });
   // Apart from the pass above: XSPH reads the neighbours' velocities of before the update. The
-  // viscosity solve starts from the packed result.
+  // viscosity solve's right-hand side takes these velocities v* (in visc_b), its iterate starts
+  // from v* plus the change its last solve made (Weiler et al. 2018's warm start; zero where the
+  // last step took the explicit step), packed.
   pool_.parallel_for(f.size(), [&](std::size_t b, std::size_t e, int) {
     for (std::size_t i = b; i < e; ++i) {
       f.vx[i] += dt * f.ax[i];
       f.vy[i] += dt * f.ay[i];
       f.vz[i] += dt * f.az[i];
+      fields_.visc_bx[i] = f.vx[i], fields_.visc_by[i] = f.vy[i], fields_.visc_bz[i] = f.vz[i];
+      f.vx[i] += f.viscous_dvx[i], f.vy[i] += f.viscous_dvy[i], f.vz[i] += f.viscous_dvz[i];
       fields_.velocity[i] = {f.vx[i], f.vy[i], f.vz[i], fields_.density_hat[i]};
     }
   });
@@ -353,7 +357,10 @@ int DfsphSolver::viscosity_solve(float dt) {
   if (lambda * lambda <= kViscosityTolerance) {
     body_fluid_forces(detail::BodyForcePart::viscous);
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
-      for (std::size_t i = b; i < e; ++i) f.vx[i] += d.cg_rx[i], f.vy[i] += d.cg_ry[i], f.vz[i] += d.cg_rz[i];
+      for (std::size_t i = b; i < e; ++i) {
+        f.vx[i] += d.cg_rx[i], f.vy[i] += d.cg_ry[i], f.vz[i] += d.cg_rz[i];
+        f.viscous_dvx[i] = 0, f.viscous_dvy[i] = 0, f.viscous_dvz[i] = 0;
+      }
     });
     ++iterations_.explicit_viscosity_steps;
     return 0;
@@ -410,6 +417,13 @@ int DfsphSolver::viscosity_solve(float dt) {
     });
   }
   if (it >= max_iterations && rr > limit) ++iterations_.unconverged_solves;
+  // The change this solve made, for the next one's start: v - v* = v - (start - last change).
+  pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int) {
+    for (std::size_t i = b; i < e; ++i) {
+      const detail::Packed4& start = d.velocity[i];
+      f.viscous_dvx[i] += f.vx[i] - start.x, f.viscous_dvy[i] += f.vy[i] - start.y, f.viscous_dvz[i] += f.vz[i] - start.z;
+    }
+  });
   body_fluid_forces(detail::BodyForcePart::viscous);
   return it;
 }

@@ -55,7 +55,7 @@ void viscosity_rhs(const SimulationParams& p, const SortedSolids& st, const Sort
     const PairRange& r = ranges[i];
     const V4 pi = load(position[i]), vi = load(velocity[i]);
     const float mui = pi[3], rhoi = vi[3];
-    V4 diagonal = splat(0), product = splat(0), b = vi;
+    V4 diagonal = splat(0), product = splat(0), b{d.visc_bx[i], d.visc_by[i], d.visc_bz[i], 0.0f};
     const std::uint32_t o = r.offset, n = r.fluid;
     for (std::uint32_t q = o; q < o + n; ++q) {
       const std::uint32_t j = list[q];

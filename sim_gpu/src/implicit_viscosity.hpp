@@ -23,10 +23,11 @@ namespace hapfluid::sim::detail {
 // bodies' share of the viscous terms (dfsph_passes.hpp) must use the same.
 inline constexpr float kLaplacianFactor = 10.0f;
 
-// The first pass of a solve, on the velocities v* in d.velocity (w: rho / rho0) and the positions in
-// d.position (w: the particle's viscosity): b = v* - dt sum_solids c (v_b . x) / d grad, the walls'
-// share of the diagonal, the Jacobi preconditioner (the inverse of the system's diagonal, per
-// component) into the viscosity fields, and K v* into cg_ax, cg_ay, cg_az.
+// The first pass of a solve, on the velocities v* in d.visc_b, the solve's start v0 in d.velocity
+// (w: rho / rho0) and the positions in d.position (w: the particle's viscosity):
+// b = v* - dt sum_solids c (v_b . x) / d grad into d.visc_b, the walls' share of the diagonal,
+// the Jacobi preconditioner (the inverse of the system's diagonal, per component) into the
+// viscosity fields, and K v0 into cg_ax, cg_ay, cg_az.
 void viscosity_rhs(const SimulationParams& p, const SortedSolids& statics, const SortedSolids& bodies,
                    const WallMap& walls, const PairLists& lists, const PairRange* ranges, std::size_t begin,
                    std::size_t end, float dt, DfsphFields& d);

@@ -14,7 +14,7 @@ void apply(std::vector<T>& values, const std::vector<std::uint32_t>& order, std:
 
 void FluidParticles::resize(std::size_t n) {
   for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &ax, &ay, &az, &density, &pressure, &volume, &viscosity,
-                  &density_stiffness_dt2, &divergence_stiffness_dt})
+                  &density_stiffness_dt2, &divergence_stiffness_dt, &viscous_dvx, &viscous_dvy, &viscous_dvz})
     v->resize(n, 0.0f);
   volume_correction.resize(n, 1.0f);
   id.resize(n, 0);
@@ -23,7 +23,8 @@ void FluidParticles::resize(std::size_t n) {
 void FluidParticles::permute(const std::vector<std::uint32_t>& order) {
   // Density, pressure, volume and volume correction are recomputed after the sort, so only
   // state is moved.
-  for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &ax, &ay, &az, &viscosity, &density_stiffness_dt2, &divergence_stiffness_dt})
+  for (auto* v : {&x, &y, &z, &vx, &vy, &vz, &ax, &ay, &az, &viscosity, &density_stiffness_dt2, &divergence_stiffness_dt,
+                  &viscous_dvx, &viscous_dvy, &viscous_dvz})
     apply(*v, order, scratch_f_);
   apply(id, order, scratch_u_);
 }

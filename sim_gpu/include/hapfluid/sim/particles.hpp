@@ -36,6 +36,9 @@ struct FluidParticles {
   // dfsph warm start: the last step's pressure stiffness of the constant-density solve times dt^2
   // and of the divergence-free solve times dt (both then independent of the step size).
   std::vector<float> density_stiffness_dt2, divergence_stiffness_dt;
+  // dfsph warm start of the implicit viscosity: the velocity change its last solve made, m/s
+  // (zero after a step that took the explicit viscous step).
+  std::vector<float> viscous_dvx, viscous_dvy, viscous_dvz;
   std::vector<std::uint32_t> id;  // creation index, unchanged by sorting
 
   std::size_t size() const { return x.size(); }
