@@ -99,7 +99,7 @@ Fluid read_fluid(Reader& r, const Domain& domain) {
                                {{"water", FluidLook::water}, {"batter", FluidLook::batter},
                                 {"honey", FluidLook::honey}, {"syrup", FluidLook::syrup}});
   for (auto& b : r.tables("blocks")) {
-    FluidBlock block{read_box(b)};
+    FluidBlock block{read_box(b), b.string("vessel", "")};
     if (b.has("min_m") && b.has("max_m") && ordered(block.box) && ordered(domain.box)) {
       b.check("max_m", inside(block.box, domain.box, 1e-9),
               "fluid block " + fmt(block.box.min_m) + ".." + fmt(block.box.max_m) + " must lie inside the domain " +
@@ -376,6 +376,27 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   for (auto& b : r.tables("bodies")) {
     scene.bodies.push_back(read_body(b, dir, scene));
     unique(b, scene.bodies.back().name, "body");
+  }
+  // A block's vessel names a body, read after the fluid.
+  const bool vessels = std::any_of(scene.fluid.blocks.begin(), scene.fluid.blocks.end(),
+                                   [](const FluidBlock& b) { return !b.vessel.empty(); });
+  if (auto f = vessels ? r.table("fluid") : std::nullopt) {
+    auto blocks = f->tables("blocks");
+    if (blocks.size() != scene.fluid.blocks.size()) blocks.clear();  // already reported
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      const std::string& vessel = scene.fluid.blocks[i].vessel;
+      if (vessel.empty()) continue;
+      const Body* body = scene.find_body(vessel);
+      if (body == nullptr)
+        blocks[i].problem("vessel", "no [[bodies]] entry is named \"" + vessel + "\"");
+      else if (body->shape == BodyShape::particle)
+        blocks[i].problem("vessel", "body \"" + vessel + "\" is a particle; a vessel is a body with a mesh");
+    }
+    const Vec3 g = scene.fluid.gravity_m_s2;
+    if (g.x == 0 && g.y == 0 && g.z == 0)
+      for (std::size_t i = 0; i < blocks.size(); ++i)
+        if (!scene.fluid.blocks[i].vessel.empty())
+          blocks[i].problem("vessel", "needs gravity to say which way is down (fluid.gravity_m_s2 is zero)");
   }
   names.clear();
   for (auto& d : r.tables("devices")) {

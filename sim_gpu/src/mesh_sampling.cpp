@@ -168,9 +168,7 @@ std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale,
   return samples;
 }
 
-bool inside_closed_mesh(const std::vector<Vec3>& v, const config::TriangleMesh& mesh, const Vec3& p) {
-  // Ray along a fixed irrational-ish direction so it almost never grazes an edge or a vertex.
-  const Vec3 dir{0.5773991, 0.5776142, 0.5771396};
+int ray_crossings(const std::vector<Vec3>& v, const config::TriangleMesh& mesh, const Vec3& p, const Vec3& dir) {
   int crossings = 0;
   for (const auto& t : mesh.triangles) {
     const Vec3 &a = v[t[0]], &b = v[t[1]], &c = v[t[2]];
@@ -187,7 +185,12 @@ bool inside_closed_mesh(const std::vector<Vec3>& v, const config::TriangleMesh& 
     if (w < 0 || u + w > 1) continue;
     if (dot(e2, r) * inv > 0) ++crossings;
   }
-  return (crossings & 1) != 0;
+  return crossings;
+}
+
+bool inside_closed_mesh(const std::vector<Vec3>& v, const config::TriangleMesh& mesh, const Vec3& p) {
+  // Ray along a fixed irrational-ish direction so it almost never grazes an edge or a vertex.
+  return (ray_crossings(v, mesh, p, Vec3{0.5773991, 0.5776142, 0.5771396}) & 1) != 0;
 }
 
 }  // namespace hapfluid::sim

@@ -249,7 +249,7 @@ SimulationModel build_model(const config::Scene& scene) {
   }
 
   // Bodies.
-  struct PlacedMesh { config::TriangleMesh mesh; std::vector<Vec3> vertices; Vec3 origin; Quat orientation; Vec3 lo, hi; };
+  struct PlacedMesh { std::string name; config::TriangleMesh mesh; std::vector<Vec3> vertices; Vec3 origin; Quat orientation; Vec3 lo, hi; };
   std::vector<PlacedMesh> placed;
   std::vector<Vec3> all_solid_world;  // for clearing fluid off solids
   for (std::size_t bi = 0; bi < scene.bodies.size(); ++bi) {
@@ -335,7 +335,7 @@ SimulationModel build_model(const config::Scene& scene) {
       static_sources.push_back(std::move(src));
     }
     all_solid_world.insert(all_solid_world.end(), world.begin(), world.end());
-    PlacedMesh pm{mesh, scaled_vertices(mesh, cb.scale), origin, q, {}, {}};
+    PlacedMesh pm{cb.name, mesh, scaled_vertices(mesh, cb.scale), origin, q, {}, {}};
     pm.lo = pm.hi = pm.vertices.front();
     for (const Vec3& v : pm.vertices) {
       pm.lo = {std::min(pm.lo.x, v.x), std::min(pm.lo.y, v.y), std::min(pm.lo.z, v.z)};
@@ -367,8 +367,16 @@ SimulationModel build_model(const config::Scene& scene) {
       const double u = z - zb, height = zt - zb;
       return zb + u - squeeze * (height * u - 0.5 * u * u);
     };
+    // Down, for a block poured into a vessel: along gravity (the loader refuses a vessel
+    // without gravity).
+    const double g_norm = std::sqrt(dot(p.gravity_m_s2, p.gravity_m_s2));
+    const Vec3 down = g_norm > 0 ? p.gravity_m_s2 * (1.0 / g_norm) : Vec3{0, 0, -1};
     for (std::size_t bi = 0; bi < scene.fluid.blocks.size(); ++bi) {
       const auto& b = scene.fluid.blocks[bi].box;
+      const PlacedMesh* vessel = nullptr;
+      for (const PlacedMesh& pm : placed)
+        if (!scene.fluid.blocks[bi].vessel.empty() && pm.name == scene.fluid.blocks[bi].vessel) vessel = &pm;
+      const Vec3 vessel_down = vessel ? transpose(rotation_matrix(vessel->orientation)) * down : Vec3{};
       for (double z = b.min_m.z + 0.5 * s; z < b.max_m.z; z += s)
         for (double y = b.min_m.y + 0.5 * s; y < b.max_m.y; y += s)
           for (double x = b.min_m.x + 0.5 * s; x < b.max_m.x; x += s) {
@@ -378,6 +386,10 @@ SimulationModel build_model(const config::Scene& scene) {
               taken = x > o.min_m.x && x < o.max_m.x && y > o.min_m.y && y < o.max_m.y && z > o.min_m.z && z < o.max_m.z;
             }
             if (taken) continue;
+            if (vessel) {
+              const Vec3 local = transpose(rotation_matrix(vessel->orientation)) * (Vec3{x, y, z} - vessel->origin);
+              if (ray_crossings(vessel->vertices, vessel->mesh, local, vessel_down) == 0) continue;
+            }
             const float fx = static_cast<float>(x), fy = static_cast<float>(y), fz = static_cast<float>(z);
             bool near = false;
             for_each_neighbour_run(p.grid, solid_sort.cell_start.data(), fx, fy, fz, [&](std::uint32_t b0, std::uint32_t e0) {

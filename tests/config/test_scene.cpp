@@ -283,3 +283,20 @@ TEST(SceneFile, SolverKeyChoosesTheMethodAndItsKeysBelongToIt) {
   misplaced.replace(misplaced.find("[fluid]\n"), 8, "[fluid]\nxsph_fraction = 0.05\n");
   expect_problem(misplaced, "fluid.xsph_fraction = 0.05: applies to solver = \"dfsph\" only");
 }
+
+TEST(Scene, AFluidBlocksVesselMustBeAMeshBodyUnderGravity) {
+  std::string text = kBase + kSpoon;
+  text.replace(text.find("max_m = [0.4, 0.3, 0.08]\n"), 25, "max_m = [0.4, 0.3, 0.08]\nvessel = \"bowl\"\n");
+  expect_problem(text, "fluid.blocks[0].vessel = \"bowl\": no [[bodies]] entry is named \"bowl\"");
+  std::string spoon = text;
+  spoon.replace(spoon.find("vessel = \"bowl\""), 15, "vessel = \"spoon\"");
+  EXPECT_EQ(problems_of(spoon), "");
+  std::string weightless = spoon;
+  weightless.replace(weightless.find("speed_of_sound_m_s = 5.0\n"), 25,
+                     "speed_of_sound_m_s = 5.0\ngravity_m_s2 = [0.0, 0.0, 0.0]\n");
+  expect_problem(weightless, "fluid.blocks[0].vessel = \"spoon\": needs gravity to say which way is down");
+  std::string probe = kBase + "[[bodies]]\nname = \"bead\"\nshape = \"particle\"\nposition_m = [0.2, 0.15, 0.2]\n" +
+                      "density_kg_m3 = 1000.0\n";
+  probe.replace(probe.find("max_m = [0.4, 0.3, 0.08]\n"), 25, "max_m = [0.4, 0.3, 0.08]\nvessel = \"bead\"\n");
+  expect_problem(probe, "fluid.blocks[0].vessel = \"bead\": body \"bead\" is a particle");
+}

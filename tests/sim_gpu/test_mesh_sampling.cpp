@@ -99,3 +99,51 @@ TEST(SurfaceSampling, InsideTest) {
   EXPECT_FALSE(inside_closed_mesh(cv, cup, {0, 0, 0.04}));   // in the cavity: outside the solid
   EXPECT_TRUE(inside_closed_mesh(cv, cup, {0, 0, 0.0025}));  // in the bottom
 }
+
+// A fluid block poured into a vessel fills the vessel's inside and nothing around it: a block
+// drawn around a cup (inner radius 45 mm, floor 5 mm thick) keeps only the lattice points with
+// the cup below them. The fill is clear of the surface by 0.75 spacing like any block, so it
+// lies within the inner radius and above the floor, and holds at least the lattice points of
+// the cavity shrunk by one spacing (a looser bound would pass a fill that left gaps).
+TEST(FluidBlocks, AVesselBlockFillsTheCupAndNotTheAirAroundIt) {
+  const double s = 0.01, r_in = 0.045, floor_top = 0.02 + 0.005, top = 0.095;
+  const std::string base = R"(
+[domain]
+min_m = [0.0, 0.0, 0.0]
+max_m = [0.3, 0.3, 0.2]
+[fluid]
+particle_spacing_m = 0.01
+solver = "dfsph"
+[[fluid.blocks]]
+min_m = [0.08, 0.08, 0.0]
+max_m = [0.22, 0.22, 0.095]
+VESSEL
+[[bodies]]
+name = "cup"
+mesh = "cup.obj"
+position_m = [0.15, 0.15, 0.02]
+dynamic = false
+sampling_spacing_m = 0.008
+)";
+  const auto dir = test::temp_dir("vessel");
+  const auto cup = test::cup_mesh(0.05, 0.1, 0.005, 64);
+  auto with = [&](const std::string& vessel) {
+    std::string text = base;
+    text.replace(text.find("VESSEL"), 6, vessel);
+    return build_model(test::write_scene(dir, text, {{"cup.obj", cup}}));
+  };
+  const SimulationModel filled = with("vessel = \"cup\"");
+  const SimulationModel whole = with("");
+  const auto& f = filled.fluid;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    ASSERT_LT(std::hypot(f.x[i] - 0.15, f.y[i] - 0.15), r_in) << "particle " << i << " outside the cup's wall";
+    ASSERT_GT(f.z[i], floor_top) << "particle " << i << " under the cup's floor";
+  }
+  std::size_t cavity = 0;  // lattice points at least one spacing inside the cavity
+  for (double z = 0.5 * s; z < top; z += s)
+    for (double y = 0.08 + 0.5 * s; y < 0.22; y += s)
+      for (double x = 0.08 + 0.5 * s; x < 0.22; x += s)
+        cavity += std::hypot(x - 0.15, y - 0.15) < r_in - s && z > floor_top + s ? 1 : 0;
+  EXPECT_GE(f.size(), cavity);
+  EXPECT_GT(whole.fluid.size(), 2 * f.size());  // without the vessel the block fills around the cup too
+}

@@ -28,6 +28,10 @@ struct Domain {
 
 struct FluidBlock {
   Aabb box;
+  // A body the block is poured into: only lattice points with that body straight below them
+  // (along gravity) are filled, so a box drawn around a bowl fills its inside up to the box's
+  // top and not the air beside or beneath it. Empty: the whole box.
+  std::string vessel;
 };
 
 // Visual preset for the renderer (§5, eq. 15): colour and wavelength-dependent extinction.

@@ -38,6 +38,9 @@ inline constexpr double kSampleRadiusFactor = 0.8;
 // that have crossed, still about the mid-surface.
 std::vector<Vec3> sample_surface(const config::TriangleMesh& mesh, double scale, double spacing_m, double inset_m = 0);
 
+// Crossings of the ray p + t dir (t > 0) with the mesh's triangles, scaled mesh frame.
+int ray_crossings(const std::vector<Vec3>& vertices, const config::TriangleMesh& mesh, const Vec3& p, const Vec3& dir);
+
 // Inside test for a closed mesh (parity of crossings of a ray), scaled mesh frame.
 bool inside_closed_mesh(const std::vector<Vec3>& vertices, const config::TriangleMesh& mesh, const Vec3& p);
 
