@@ -94,9 +94,13 @@ class Run:
         return next(d for d in self.scene["devices"] if d["name"] == device).get("motion", [])
 
     def fluid_weight_n(self) -> float:
-        fluid = self.scene["fluid"]
-        volume = sum(np.prod(np.subtract(b["max_m"], b["min_m"])) for b in fluid.get("blocks", []))
-        return float(volume * fluid.get("rest_density_kg_m3", 1000.0) * GRAVITY_M_S2)
+        """The weight of the fluid the sim made (its stats.json): a block poured into a vessel
+        fills only part of its box."""
+        stats_path = self.folder / (BATCH_DIR if self.batch else "sim") / "stats.json"
+        stats = json.loads(stats_path.read_text())
+        if "fluid_mass_kg" not in stats:
+            raise ValueError(f"{stats_path}: no fluid_mass_kg (written by an older haptic-sim?)")
+        return float(stats["fluid_mass_kg"]) * GRAVITY_M_S2
 
 
 def window_mean(data: dict, key: str, start: float, stop: float, what: str) -> float:

@@ -158,6 +158,7 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
     << "  \"threads\": " << solver.threads() << ",\n"
     << "  \"particles\": {\"fluid\": " << m.fluid.size() << ", \"boundary\": " << m.wall_particle_count
     << ", \"static_body\": " << m.static_body_particle_count << ", \"body\": " << m.body_particles.size() << "},\n"
+    << "  \"fluid_mass_kg\": " << num(static_cast<double>(m.fluid.size()) * m.params.fluid_particle_mass_kg) << ",\n"
     << "  \"solver\": \"" << solver.method() << "\",\n"
     << "  \"steps\": " << solver.steps() << ",\n"
     << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"

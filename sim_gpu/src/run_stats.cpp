@@ -21,6 +21,7 @@ StatsJson batch_stats(const RunRecord& run, const std::string& backend) {
   j["backend"] = backend;
   j["particles"] = {{"fluid", fluid}, {"boundary", walls}, {"static_body", statics}, {"body", bodies},
                     {"total", fluid + walls + statics + bodies}};
+  j["fluid_mass_kg"] = static_cast<double>(fluid) * m.params.fluid_particle_mass_kg;
   j["steps"] = r.steps;
   j["dt_s"] = {{"min", r.steps > 0 ? run.dt_min_s : 0.0}, {"max", run.dt_max_s},
                {"mean", steps > 0 ? r.simulated_time_s / steps : 0.0}};

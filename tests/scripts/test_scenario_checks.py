@@ -12,6 +12,7 @@ import pytest
 
 OFFSET_S = 0.2   # scene time 0 at 0.2 s of the sim's wall clock
 LEAD_IN_S = 1.5
+FLUID_MASS_KG = 0.14  # 1.37 N of fluid: the synthetic load shifts below are sized against it
 
 
 @pytest.fixture(scope="module")
@@ -19,17 +20,22 @@ def checks(script):
     return script("scenario_checks")
 
 
-def make_run(folder, source_dir, scene, wrench, end_s, device_log=None, batch=False):
+def make_run(folder, source_dir, scene, wrench, end_s, device_log=None, batch=False, fluid_mass_kg=FLUID_MASS_KG):
     """wrench(device, t) -> (fx, fy, fz, tx, ty, tz) at scene time t, sampled at 500 Hz up to end_s.
     batch: the history is a batch run's (batch/couplings.csv, t = scene time; a live run's sim/
-    beside it holds a contrary history, which must not be judged)."""
+    beside it holds a contrary history, which must not be judged). fluid_mass_kg: the fluid
+    the sim reports in its stats.json, which the load checks weigh against."""
     (folder / "sim").mkdir(parents=True)
+    stats = json.dumps({"fluid_mass_kg": fluid_mass_kg})
+    (folder / "sim" / "stats.json").write_text(stats)
     if batch:
         make_run(folder / "batch-tmp", source_dir, scene, wrench, end_s)
         rows = (folder / "batch-tmp" / "sim" / "couplings.csv").read_text().splitlines()
         (folder / "batch").mkdir()
         shifted = [f"{float(r.split(',')[0]) - OFFSET_S:.4f}," + r.split(",", 1)[1] for r in rows[1:]]
         (folder / "batch" / "couplings.csv").write_text("\n".join([rows[0]] + shifted) + "\n")
+        (folder / "batch" / "stats.json").write_text(stats)
+        (folder / "sim" / "stats.json").write_text(json.dumps({"fluid_mass_kg": 0.0}))  # must not be judged either
         wrench = lambda d, t: (0,) * 6  # noqa: E731  (the live history: no load anywhere)
     shutil.copy(source_dir / "config" / "scenes" / f"{scene}.toml", folder / "scene.toml")
     (folder / "summary.json").write_text(json.dumps({"script_offset_s": OFFSET_S, "lead_in_s": LEAD_IN_S}))
@@ -110,6 +116,15 @@ def test_pouring_holds_when_the_load_moves_from_the_bowl_hand_to_the_pan_hand(ch
     assert verdict.holds is holds, verdict.text
     assert verdict.numbers["bowl_load_n"][0] == pytest.approx(5.0, abs=0.01)
     assert verdict.numbers["pan_load_n"][1] == pytest.approx(6.0 + shift_n, abs=0.01)
+
+
+def test_the_fluid_weight_is_what_the_sim_made_not_the_blocks_box(checks, source_dir, tmp_path):
+    # bowl_pouring's block is drawn around the bowl and filled only inside it: the sim's stats.json
+    # says how much fluid there is. The same 1.2 N shift is too little of 0.5 kg of water.
+    run = make_run(tmp_path / "run", source_dir, "bowl_pouring", pour(1.2), 9.0, fluid_mass_kg=0.5)
+    verdict = checks.check("pouring", [run])
+    assert not verdict.holds, verdict.text
+    assert verdict.numbers["fluid_weight_n"] == pytest.approx(0.5 * 9.81, abs=0.001)
 
 
 def test_pouring_judged_before_the_bowl_is_back_cannot_be_judged(checks, source_dir, tmp_path):

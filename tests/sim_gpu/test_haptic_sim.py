@@ -223,6 +223,8 @@ def test_rerun_that_diverges_midway_leaves_nothing_that_looks_complete(binary, s
     assert stats["complete"] is False
     assert stats["error"].startswith("simulation diverged at t = 0.12 s: fluid particle ")
     assert stats["scene"] == str(scene) and stats["particles"]["fluid"] == 8
+    # The mass of the lattice particle is rho0 s^3 up to the kernel's lattice sum (within 5 %).
+    assert abs(stats["fluid_mass_kg"] - 8 * 1000.0 * 0.01 ** 3) < 0.05 * 8 * 1000.0 * 0.01 ** 3
     assert stats["steps"] == 110  # 11 frames of 10 steps passed the check; the 12th did not
     assert not (out / "bodies.csv").exists() and not (out / "couplings.csv").exists()
     assert (out / "bodies.csv.part").exists() and (out / "couplings.csv.part").exists()
