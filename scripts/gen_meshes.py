@@ -127,6 +127,14 @@ def pan():
     return Mesh().add(body).add(handle)
 
 
+def saucepan():
+    """The pan's width at twice its depth, for a pour of a full bowl: the hand holding it by its
+    handle tilts it a few degrees under the water's torque, and a shallow pan spills."""
+    body = cup(0.11, 0.12, 0.07, 0.008, 0.008)
+    handle = box((0.12, -0.012, 0.055), (0.27, 0.012, 0.067))
+    return Mesh().add(body).add(handle)
+
+
 def bucket():
     body = cup(0.09, 0.11, 0.18, 0.01, 0.012)
     # Two lugs the hands hold, just outside the rim on -x and +x.
@@ -139,6 +147,7 @@ MESHES = {
     "spoon": (spoon, "stirring spoon, bowl 0.06 x 0.075 x 0.1 m facing +x, handle to z = 0.28 m (§6.4.1)"),
     "bowl": (lambda: bowl_shell(0.08, 0.012), "hemispherical bowl, radius 0.08 m, wall 0.012 m, rim at z = 0 (§6.4.2)"),
     "pan": (pan, "pan, radius 0.12 m, depth 0.035 m, handle along +x (§6.4.2, §6.5)"),
+    "saucepan": (saucepan, "saucepan, radius 0.12 m, depth 0.07 m, handle along +x (§6.4.2)"),
     "glass": (lambda: cup(0.045, 0.05, 0.13, 0.01, 0.012), "glass, radius 0.05 m, height 0.13 m (§6.4.3)"),
     "bucket": (bucket, "bucket, radius 0.09-0.11 m, height 0.18 m, two side lugs (§6.4.4)"),
     "sphere": (lambda: sphere(0.05), "sphere, radius 0.05 m (unified-model benchmarks, fig. 6b/6c)"),
