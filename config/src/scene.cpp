@@ -58,7 +58,7 @@ Domain read_domain(Reader& r) {
 
 Fluid read_fluid(Reader& r, const Domain& domain) {
   Fluid f;
-  f.solver = r.choice<PressureSolver>("solver", PressureSolver::wcsph,
+  f.solver = r.choice<PressureSolver>("solver", PressureSolver::dfsph,
                                       {{"dfsph", PressureSolver::dfsph}, {"wcsph", PressureSolver::wcsph}});
   const bool wcsph = f.solver == PressureSolver::wcsph;
   f.rest_density_kg_m3 = r.number("rest_density_kg_m3", f.rest_density_kg_m3);

@@ -21,6 +21,7 @@ min_m = [0.0, 0.0, 0.0]
 max_m = [0.4, 0.3, 0.4]
 
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.02
 speed_of_sound_m_s = 5.0
 
@@ -94,7 +95,7 @@ TEST(Scene, ValidSceneResolvesDefaults) {
 TEST(Scene, NonPositiveSpacing) {
   std::string text = kBase;
   text.replace(text.find("0.02"), 4, "-0.01");
-  expect_problem(text, "test.toml:7: fluid.particle_spacing_m = -0.01: must be > 0");
+  expect_problem(text, "test.toml:8: fluid.particle_spacing_m = -0.01: must be > 0");
 }
 
 TEST(Scene, BodyOutsideTheDomain) {
@@ -136,7 +137,7 @@ sampling_spacing_m = 0.01
   const std::string two_bodies = kBase + kSpoon + ladle + kHand +
                                  "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n"
                                  "[[couplings]]\ndevice = \"hand\"\nbody = \"ladle\"\n";
-  expect_problem(two_bodies, "test.toml:35: couplings[1].device = \"hand\": already holds body \"spoon\" (couplings[0]): "
+  expect_problem(two_bodies, "test.toml:36: couplings[1].device = \"hand\": already holds body \"spoon\" (couplings[0]): "
                              "a device holds one body; give \"ladle\" its own [[devices]] entry, or couple it to a "
                              "device that holds nothing");
   expect_problem(kBase + kSpoon + kHand + "[[couplings]]\ndevice = \"hand\"\nbody = \"spoon\"\n"
@@ -270,13 +271,13 @@ TEST(Scene, WorkspaceCentreDefaultsToTheHandsStart) {
 TEST(SceneFile, SolverKeyChoosesTheMethodAndItsKeysBelongToIt) {
   EXPECT_EQ(parse_scene(kBase, kScenePath).fluid.solver, PressureSolver::wcsph);
   std::string dfsph = kBase;
-  dfsph.replace(dfsph.find("[fluid]\n"), 8, "[fluid]\nsolver = \"dfsph\"\ndensity_error_percent = 0.05\n");
+  dfsph.replace(dfsph.find("solver = \"wcsph\"\n"), 17, "solver = \"dfsph\"\ndensity_error_percent = 0.05\n");
   const Scene s = parse_scene(dfsph, kScenePath);
   EXPECT_EQ(s.fluid.solver, PressureSolver::dfsph);
   EXPECT_DOUBLE_EQ(s.fluid.density_error_percent, 0.05);
   EXPECT_DOUBLE_EQ(s.time.cfl, TimeStepping::kDefaultCflDfsph);
   std::string unknown = kBase;
-  unknown.replace(unknown.find("[fluid]\n"), 8, "[fluid]\nsolver = \"sph\"\n");
+  unknown.replace(unknown.find("solver = \"wcsph\"\n"), 17, "solver = \"sph\"\n");
   expect_problem(unknown, "fluid.solver");
   expect_problem(unknown, "\"dfsph\"");
   std::string misplaced = kBase;
@@ -299,4 +300,14 @@ TEST(Scene, AFluidBlocksVesselMustBeAMeshBodyUnderGravity) {
                       "density_kg_m3 = 1000.0\n";
   probe.replace(probe.find("max_m = [0.4, 0.3, 0.08]\n"), 25, "max_m = [0.4, 0.3, 0.08]\nvessel = \"bead\"\n");
   expect_problem(probe, "fluid.blocks[0].vessel = \"bead\": body \"bead\" is a particle");
+}
+
+TEST(Scene, TheIncompressibleSolverIsTheDefault) {
+  std::string text = kBase;
+  text.replace(text.find("solver = \"wcsph\"\n"), 17, "");
+  const Scene s = parse_scene(text, kScenePath);
+  EXPECT_EQ(s.fluid.solver, PressureSolver::dfsph);
+  EXPECT_DOUBLE_EQ(s.time.cfl, TimeStepping::kDefaultCflDfsph);
+  text.replace(text.find("speed_of_sound_m_s = 5.0\n"), 25, "");
+  EXPECT_EQ(problems_of(text), "");  // no pressure law to give: the speed of sound is optional
 }

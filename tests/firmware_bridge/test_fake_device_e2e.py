@@ -277,6 +277,7 @@ duration_s = 2.0
 min_m = [0.0, 0.0, 0.0]
 max_m = [0.40, 0.30, 0.40]
 [fluid]
+solver = "wcsph"
 rest_density_kg_m3 = 1000.0
 particle_spacing_m = 0.02
 viscosity_pa_s = 0.2

@@ -29,7 +29,7 @@ def write_recorded_run(run_dir: pathlib.Path, frames: int, scene_in_stats: bool 
     scene = (run_dir / "cli_replay.toml") if scene_in_stats else (run_dir / "scene.toml")
     scene.write_text(
         'name = "cli_replay"\n[domain]\nmin_m = [-0.3, -0.3, 0.0]\nmax_m = [0.3, 0.3, 0.5]\n'
-        '[fluid]\nparticle_spacing_m = 0.02\nspeed_of_sound_m_s = 20.0\nlook = "syrup"\n'
+        '[fluid]\nsolver = "wcsph"\nparticle_spacing_m = 0.02\nspeed_of_sound_m_s = 20.0\nlook = "syrup"\n'
         '[time]\nframe_rate_hz = 30.0\n'
         '[[bodies]]\nname = "spoon"\nmesh = "cube.obj"\nposition_m = [0.0, 0.0, 0.25]\ndensity_kg_m3 = 500.0\n')
     if scene_in_stats:
@@ -111,7 +111,7 @@ def test_replay_of_a_missing_run_names_the_folder(binary, tmp_path):
     run_dir = tmp_path / "nothing_here"
     run_dir.mkdir()
     (run_dir / "scene.toml").write_text(
-        'name = "x"\n[domain]\nmin_m = [0, 0, 0]\nmax_m = [1, 1, 1]\n[fluid]\nparticle_spacing_m = 0.02\n'
+        'name = "x"\n[domain]\nmin_m = [0, 0, 0]\nmax_m = [1, 1, 1]\n[fluid]\nsolver = "wcsph"\nparticle_spacing_m = 0.02\n'
         'speed_of_sound_m_s = 20.0\n')
     r = run(binary, "--headless", "--replay", run_dir, "--out", tmp_path / "o", *SMALL)
     assert r.returncode == 1

@@ -29,6 +29,7 @@ struct RecordedRun {
 min_m = [-0.3, -0.3, 0.0]
 max_m = [0.3, 0.3, 0.5]
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.02
 speed_of_sound_m_s = 20.0
 look = "honey"

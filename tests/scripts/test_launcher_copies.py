@@ -13,6 +13,7 @@ duration_s = 2.0
 min_m = [0.0, 0.0, 0.0]
 max_m = [0.2, 0.2, 0.2]
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.02   # a comment the copy need not keep
 [[bodies]]
 name = "spoon"

@@ -32,6 +32,7 @@ name = "bad"
 min_m = [0.0, 0.0, 0.0]
 max_m = [0.3, 0.3, 0.3]
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 )";
@@ -89,11 +90,11 @@ TEST(BadScenes, NonFiniteValueIsRefusedByKey) {
   // TOML has nan and inf; a scene must not carry them into the particles. The message names the
   // file and line, the key, the value as written and that it is not finite.
   std::string e = error_of(std::string(kBase) + "[[fluid.blocks]]\nmin_m = [0.0, 0.0, nan]\nmax_m = [0.1, 0.1, 0.1]\n", {});
-  EXPECT_NE(e.find("<dir>/scene.toml:10: fluid.blocks[0].min_m = [0.0, 0.0, nan]: must be an array of 3 finite numbers"),
+  EXPECT_NE(e.find("<dir>/scene.toml:11: fluid.blocks[0].min_m = [0.0, 0.0, nan]: must be an array of 3 finite numbers"),
             std::string::npos)
       << e;
   e = error_of(std::string(kBase) + "viscosity_pa_s = inf\n", {});
-  EXPECT_NE(e.find("<dir>/scene.toml:9: fluid.viscosity_pa_s = inf: must be finite"), std::string::npos) << e;
+  EXPECT_NE(e.find("<dir>/scene.toml:10: fluid.viscosity_pa_s = inf: must be finite"), std::string::npos) << e;
 }
 
 TEST(BadScenes, ParticleSpacingTooLargeForTheMeshIsRefused) {

@@ -57,6 +57,7 @@ name = "splash"
 min_m = [0.0, 0.0, 0.0]
 max_m = [0.16, 0.08, 0.16]
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.008
 speed_of_sound_m_s = 12.0
 viscosity_pa_s = 0.2
@@ -117,7 +118,7 @@ TEST(Determinism, SameSceneTwiceWithTwoThreadsIsBitForBitEqual) {
 TEST(Determinism, DfsphGivesTheSameStateOnOneAndTwoThreads) {
   const auto dir = test::temp_dir("determinism_dfsph");
   std::string text = kSplashScene;
-  text.replace(text.find("speed_of_sound_m_s"), 0, "solver = \"dfsph\"\nxsph_fraction = 0.05\nsettle_s = 0.02\n");
+  text.replace(text.find("solver = \"wcsph\"\n"), 16, "solver = \"dfsph\"\nxsph_fraction = 0.05\nsettle_s = 0.02\n");
   const auto scene = test::write_scene(dir, text, {{"ball.obj", test::sphere_mesh(0.025, 2)}});
   std::vector<float> runs[3];
   for (int k = 0; k < 3; ++k) {

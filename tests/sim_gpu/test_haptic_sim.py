@@ -43,6 +43,7 @@ duration_s = 0.1
 min_m = [0.0, 0.0, 0.0]
 max_m = [0.16, 0.1, 0.12]
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 viscosity_pa_s = 1.0

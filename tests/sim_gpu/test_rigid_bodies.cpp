@@ -33,6 +33,7 @@ TEST(RigidBody, FreeFallInVacuumFollowsGravity) {
   const auto dir = test::temp_dir("freefall");
   const auto scene = test::write_scene(dir, "name = \"fall\"\n" + domain(0, 0, 0, 0.3, 0.3, 0.5) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 [[bodies]]
@@ -69,7 +70,7 @@ struct Collision {
 Collision collide_in_zero_gravity(double viscosity_pa_s) {
   const auto dir = test::temp_dir("momentum");
   char fluid[256];
-  std::snprintf(fluid, sizeof fluid, "[fluid]\nparticle_spacing_m = 0.01\nspeed_of_sound_m_s = 10.0\nviscosity_pa_s = %g\n",
+  std::snprintf(fluid, sizeof fluid, "[fluid]\nsolver = \"wcsph\"\nparticle_spacing_m = 0.01\nspeed_of_sound_m_s = 10.0\nviscosity_pa_s = %g\n",
                 viscosity_pa_s);
   const auto scene = test::write_scene(dir, "name = \"collide\"\n" +
                                                 domain(0, 0, 0, 0.8, 0.5, 0.5,
@@ -158,6 +159,7 @@ TEST(RigidBody, TorqueFreeBoxTumblesConservingAngularMomentumAndEnergy) {
   const auto dir = test::temp_dir("tumble");
   const auto scene = test::write_scene(dir, "name = \"tumble\"\n" + domain(0, 0, 0, 0.4, 0.4, 0.4) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 gravity_m_s2 = [0.0, 0.0, 0.0]
@@ -211,6 +213,7 @@ TEST(RigidBody, SphereOfHalfWaterDensityFloatsHalfSubmerged) {
   const auto dir = test::temp_dir("float");
   const auto scene = test::write_scene(dir, "name = \"float\"\n" + domain(0, 0, 0, 0.15, 0.15, 0.2) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.0125
 speed_of_sound_m_s = 12.0
 viscosity_pa_s = 3.0
@@ -309,6 +312,7 @@ TEST(RigidBody, StaticCupHoldsFluid) {
   const auto dir = test::temp_dir("cup");
   const auto scene = test::write_scene(dir, "name = \"cup\"\n" + domain(-0.1, -0.1, 0, 0.1, 0.1, 0.15) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.008
 speed_of_sound_m_s = 10.0
 viscosity_pa_s = 1.0
@@ -393,7 +397,7 @@ angular_damping_nm_s_per_rad = 0.05
   const char* method = incompressible ? R"(solver = "dfsph"
 settle_s = 0.1
 )"
-                                      : "speed_of_sound_m_s = 10.0\n";
+                                      : "solver = \"wcsph\"\nspeed_of_sound_m_s = 10.0\n";
   const char* time = incompressible ? "cfl = 0.4\nmax_dt_s = 0.005\n" : "cfl = 0.2\n";
   const auto scene = test::write_scene(dir, "name = \"spin\"\n" + domain(-0.08, -0.08, 0, 0.08, 0.08, 0.14) + R"(
 [fluid]
@@ -602,6 +606,7 @@ TEST(Coupling, StirringToolFeelsForceAgainstItsMotion) {
   const auto dir = test::temp_dir("stir");
   const auto scene = test::write_scene(dir, "name = \"stir\"\n" + domain(0, 0, 0, 0.24, 0.12, 0.14) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 viscosity_pa_s = 1.0
@@ -747,7 +752,7 @@ TEST(Probe, AHeldProbeInAirRendersItsWeightAndNoTorque) {
   // particle's mass, ~1 g at 1 cm) hangs in the coupling spring, and the device feels exactly
   // its weight, straight down, and never a torque.
   const auto dir = test::temp_dir("probe_air");
-  const auto solver = make_cpu_solver(build_model(probe_scene(dir, "speed_of_sound_m_s = 10.0\n", "", false)), 1);
+  const auto solver = make_cpu_solver(build_model(probe_scene(dir, "solver = \"wcsph\"\nspeed_of_sound_m_s = 10.0\n", "", false)), 1);
   ASSERT_EQ(solver->model().bodies.size(), 1u);
   ASSERT_EQ(solver->model().bodies[0].particle_count, 1u);
   const double mass = solver->model().bodies[0].mass_kg;
@@ -773,7 +778,7 @@ TEST(Probe, AHandDraggingItThroughAirFeelsNoSpringAtTheEndOfEachStep) {
   // a step behind and the hand feels the spring K v dt against its motion (0.04 N here). Within
   // a tenth of that: the probe's leap-frog velocity is half a step off the hand's.
   const auto dir = test::temp_dir("probe_drag");
-  const auto solver = make_cpu_solver(build_model(probe_scene(dir, "speed_of_sound_m_s = 10.0\n", "", false)), 1);
+  const auto solver = make_cpu_solver(build_model(probe_scene(dir, "solver = \"wcsph\"\nspeed_of_sound_m_s = 10.0\n", "", false)), 1);
   const VirtualCoupling& c = solver->model().couplings[0];
   // 0.6 s at 0.1 m/s: 6 cm along the 20 cm box from its middle, clear of the far wall.
   const double dt = 0.008, speed = 0.1, k = c.linear_stiffness_n_per_m, d = c.linear_damping_n_s_per_m;
@@ -810,7 +815,7 @@ frequency_hz = 1.0
   for (const std::string method : {"wcsph", "dfsph"}) {
     const auto dir = test::temp_dir("probe_" + method);
     const std::string fluid = method == "dfsph" ? "solver = \"dfsph\"\nsettle_s = 0.1\n[time]\nmax_dt_s = 0.005\n"
-                                                : "speed_of_sound_m_s = 10.0\n[time]\ncfl = 0.2\n";
+                                                : "solver = \"wcsph\"\nspeed_of_sound_m_s = 10.0\n[time]\ncfl = 0.2\n";
     const auto solver = make_cpu_solver(build_model(probe_scene(dir, fluid, stroke)), 2);
     double power = 0, speed2 = 0;
     bool torque_free = true;
@@ -839,6 +844,7 @@ TEST(Coupling, TwoDevicesHoldingOneBarShareItsWeight) {
   const auto dir = test::temp_dir("bimanual");
   const auto scene = test::write_scene(dir, "name = \"bar\"\n" + domain(0, 0, 0, 0.5, 0.2, 0.3) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 [[bodies]]
@@ -881,6 +887,7 @@ TEST(RigidBody, BodiesCollideWithEachOtherAndTheFloorWithoutPassingThrough) {
   const auto dir = test::temp_dir("stack");
   const auto scene = test::write_scene(dir, "name = \"stack\"\n" + domain(0, 0, 0, 0.2, 0.2, 0.4) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 [[bodies]]
@@ -922,6 +929,7 @@ TEST(RigidBody, BallDroppedOnTheFloorStopsBouncingAndRestsOnIt) {
   const auto dir = test::temp_dir("drop");
   const auto scene = test::write_scene(dir, "name = \"drop\"\n" + domain(0, 0, 0, 0.2, 0.2, 0.4) + R"(
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.01
 speed_of_sound_m_s = 10.0
 [[bodies]]

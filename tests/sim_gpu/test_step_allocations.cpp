@@ -59,7 +59,7 @@ namespace {
 hapfluid::config::Scene tank_with_a_ball(const char* method) {
   const auto dir = test::temp_dir(std::string("alloc_") + method);
   std::string extra = std::string(method) == "dfsph" ? "solver = \"dfsph\"\nsettle_s = 0.05\n"
-                                                     : "speed_of_sound_m_s = 12.0\n";
+                                                     : "solver = \"wcsph\"\nspeed_of_sound_m_s = 12.0\n";
   return test::write_scene(dir, R"(name = "alloc"
 [domain]
 min_m = [0.0, 0.0, 0.0]

@@ -173,6 +173,7 @@ hs::SimulationModel spun_cup(double container_viscosity) {
 min_m = [-0.08, -0.08, 0.0]
 max_m = [0.08, 0.08, 0.14]
 [fluid]
+solver = "wcsph"
 particle_spacing_m = 0.008
 speed_of_sound_m_s = 10.0
 viscosity_pa_s = 2.0

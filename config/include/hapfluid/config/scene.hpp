@@ -37,14 +37,14 @@ struct FluidBlock {
 // Visual preset for the renderer (§5, eq. 15): colour and wavelength-dependent extinction.
 enum class FluidLook { water, batter, honey, syrup };
 
-// The pressure solver. wcsph: the paper's weakly compressible state equation (eq. 7), time step
-// from the speed of sound; the reference, and the default. dfsph: incompressible,
-// divergence-free plus constant-density solves (Bender & Koschier 2017), time step from the flow
-// velocity; experimental (sim_gpu/README.md says what does not hold yet).
+// The pressure solver. dfsph, the default: incompressible, divergence-free plus constant-density
+// solves (Bender & Koschier 2017), time step from the flow velocity (CPU backend; sim_gpu/README.md
+// says what does not hold yet). wcsph: the paper's weakly compressible state equation (eq. 7),
+// time step from the speed of sound; the reference, and the Vulkan backend's.
 enum class PressureSolver { wcsph, dfsph };
 
 struct Fluid {
-  PressureSolver solver = PressureSolver::wcsph;
+  PressureSolver solver = PressureSolver::dfsph;
   double rest_density_kg_m3 = 1000.0;
   double particle_spacing_m = 0.02;
   double support_radius_m = 0.0;   // h; 0: derived as 2 * particle_spacing_m
