@@ -1,4 +1,5 @@
 #include "live_runner.hpp"
+#include "thread_choice.hpp"
 
 #include "hapfluid/sim/thread_pool.hpp"
 
@@ -137,8 +138,9 @@ std::string probe_json(const BackendProbe& p) {
          num(p.real_time_factor()) + "}";
 }
 
-std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const Counters& c, double wall_s,
-                       const std::vector<std::string>& device_map, bool complete, const std::string& error) {
+std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const Counters& c, const ThreadChoice& threads,
+                       double wall_s, const std::vector<std::string>& device_map, bool complete,
+                       const std::string& error) {
   const LiveSolver& solver = *backend.solver;
   const ComputeDevice device = solver.device();
   const SimulationModel& m = solver.model();
@@ -156,6 +158,10 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
     << json_escape(backend.reason) << "\", \"vulkan_probe\": " << probe_json(backend.vulkan_probe)
     << ", \"cpu_probe\": " << probe_json(backend.cpu_probe) << "},\n"
     << "  \"threads\": " << solver.threads() << ",\n"
+    // Steps at all worker threads and at one, as the live sim chose them (thread_choice.hpp).
+    << "  \"thread_choice\": {\"chosen\": " << threads.chosen() << ", \"probes\": " << threads.probes()
+    << ", \"steps_with_all\": " << threads.steps_with_all() << ", \"steps_with_one\": " << threads.steps_with_one()
+    << "},\n"
     << "  \"particles\": {\"fluid\": " << m.fluid.size() << ", \"boundary\": " << m.wall_particle_count
     << ", \"static_body\": " << m.static_body_particle_count << ", \"body\": " << m.body_particles.size() << "},\n"
     << "  \"fluid_mass_kg\": " << num(static_cast<double>(m.fluid.size()) * m.params.fluid_particle_mass_kg) << ",\n"
@@ -293,6 +299,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   const std::uint64_t watchdog_ns = notifier.watchdog_ping_interval_ns();
 
   Counters c;
+  ThreadChoice thread_choice(solver->threads());
   const std::uint64_t start_ns = shm::monotonic_ns();
   std::uint64_t origin_ns = start_ns;  // wall time of simulated time 0 (moves when the backlog is dropped)
   const double frame_period = 1.0 / m.params.frame_rate_hz;
@@ -429,9 +436,11 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         solver->set_device_state(d, held[d]);
       }
 
+      if (thread_choice.threads() > 1) solver->set_active_threads(thread_choice.next());
       const std::uint64_t step_start = shm::monotonic_ns();
       solver->step(dt);
       now = shm::monotonic_ns();
+      thread_choice.took(double(now - step_start) * 1e-9);
       c.step_wall_max_s = std::max(c.step_wall_max_s, double(now - step_start) * 1e-9);
       c.step_wall_total_s += double(now - step_start) * 1e-9;
       c.dt_min = std::min(c.dt_min, dt), c.dt_max = std::max(c.dt_max, dt);
@@ -516,9 +525,10 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         const double window = std::max(double(now - status_wall_ns) * 1e-9, 1e-9);
         char line[260];
         std::snprintf(line, sizeof line,
-                      "haptic-sim: t = %.2f s, %.0f steps/s, real-time factor %.2f, %llu samples, %llu frames%s%s\n",
+                      "haptic-sim: t = %.2f s, %.0f steps/s, real-time factor %.2f, %d thread(s), %llu samples, "
+                      "%llu frames%s%s\n",
                       solver->time_s(), double(solver->steps() - status_steps) / window,
-                      (solver->time_s() - status_sim_s) / window, (unsigned long long)c.samples,
+                      (solver->time_s() - status_sim_s) / window, solver->active_threads(), (unsigned long long)c.samples,
                       (unsigned long long)c.particle_frames, clamp_note(solver->clamped_particle_count()).c_str(),
                       input.live() ? "" : ", no haptic-rt");
         log << line << std::flush;
@@ -543,7 +553,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       if (couplings_csv) couplings_csv->finish();
       if (bodies_csv) bodies_csv->finish();
     }
-    write_text_atomically(o.out / "stats.json", stats_json(o, backend, c, wall_s, matches, error.empty(), error));
+    write_text_atomically(o.out / "stats.json", stats_json(o, backend, c, thread_choice, wall_s, matches, error.empty(), error));
   }
   char line[360];
   std::snprintf(line, sizeof line,

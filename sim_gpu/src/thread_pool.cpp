@@ -42,6 +42,7 @@ int usable_cpus() {
 
 ThreadPool::ThreadPool(int threads) : threads_(threads), slots_(threads > kSlots ? threads : kSlots) {
   if (threads < 1) throw std::invalid_argument("thread count must be >= 1");
+  active_.store(threads, std::memory_order_relaxed);
   for (int w = 1; w < threads; ++w) helpers_.emplace_back([this, w] { worker_loop(w); });
 }
 
@@ -79,8 +80,12 @@ void ThreadPool::take_slots(unsigned long generation, bool caller) {
   }
 }
 
+void ThreadPool::set_active(int threads) {
+  active_.store(std::clamp(threads, 1, threads_), std::memory_order_relaxed);
+}
+
 void ThreadPool::run(std::size_t count, const Job& fn) {
-  if (threads_ == 1) {
+  if (active_.load(std::memory_order_relaxed) == 1) {
     for (int s = 0; s < slots_; ++s) {
       std::size_t begin, end;
       chunk(count, slots_, s, begin, end);
@@ -108,7 +113,7 @@ void ThreadPool::run(std::size_t count, const Job& fn) {
   }
 }
 
-void ThreadPool::worker_loop(int) {
+void ThreadPool::worker_loop(int w) {
   unsigned long seen = 0;
   for (;;) {
     auto next = [&] {
@@ -120,7 +125,9 @@ void ThreadPool::worker_loop(int) {
     }
     if (stopping_.load()) return;
     seen = generation_.load(std::memory_order_acquire);
-    take_slots(seen, false);
+    // A helper beyond the active count lets the others take the slots (it sleeps once the
+    // jobs stop coming to it).
+    if (w < active_.load(std::memory_order_relaxed)) take_slots(seen, false);
   }
 }
 

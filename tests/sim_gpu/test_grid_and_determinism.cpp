@@ -120,15 +120,25 @@ TEST(Determinism, DfsphGivesTheSameStateOnOneAndTwoThreads) {
   std::string text = kSplashScene;
   text.replace(text.find("solver = \"wcsph\"\n"), 16, "solver = \"dfsph\"\nxsph_fraction = 0.05\nsettle_s = 0.02\n");
   const auto scene = test::write_scene(dir, text, {{"ball.obj", test::sphere_mesh(0.025, 2)}});
-  std::vector<float> runs[3];
-  for (int k = 0; k < 3; ++k) {
+  std::vector<float> runs[4];
+  for (int k = 0; k < 4; ++k) {
     const auto solver = make_cpu_solver(build_model(scene), k == 2 ? 1 : 2);
     ASSERT_STREQ(solver->method(), "dfsph");
-    test::run_for(*solver, kRunSeconds);
+    if (k < 3) {
+      test::run_for(*solver, kRunSeconds);
+    } else {
+      // As a live sim choosing its thread count as it runs (live/thread_choice.hpp): one and two
+      // threads in turn, step by step.
+      const int frames = static_cast<int>(std::lround(kRunSeconds / 0.01));
+      for (int f = 0; f < frames; ++f)
+        solver->advance(0.01, [&](double) { solver->set_active_threads(solver->steps() % 2 == 0 ? 1 : 2); });
+      EXPECT_EQ(solver->threads(), 2);
+    }
     solver->sync_and_check_finite();
     runs[k] = snapshot(*solver);
   }
   EXPECT_EQ(std::memcmp(runs[0].data(), runs[1].data(), runs[0].size() * sizeof(float)), 0) << "two threads, twice";
   EXPECT_EQ(std::memcmp(runs[0].data(), runs[2].data(), runs[0].size() * sizeof(float)), 0) << "two threads and one";
+  EXPECT_EQ(std::memcmp(runs[0].data(), runs[3].data(), runs[0].size() * sizeof(float)), 0) << "one and two in turn";
   std::filesystem::remove_all(dir);
 }

@@ -373,3 +373,27 @@ def test_the_live_runner_reports_the_wall_clamp_as_a_fault(binary, source_dir, t
     assert calm.returncode == 0, calm.stderr
     assert "clamp" not in calm.stderr
     assert json.loads((tmp_path / "calm-out" / "stats.json").read_text())["clamped_particle_events"] == 0
+
+
+def test_the_live_sim_reports_how_many_threads_it_stepped_with(binary, tmp_path):
+    # With two worker threads the live sim times both counts as it runs and steps with the faster
+    # (live/thread_choice.hpp); stats.json and the status lines say what it used. One thread has
+    # nothing to choose.
+    scene = write_scene(tmp_path / "scene")
+    for threads in ("2", "1"):
+        out = tmp_path / f"out{threads}"
+        result = subprocess.run([str(binary("haptic-sim")), "--live", "--scene", str(scene), "--backend", "cpu",
+                                 "--threads", threads, "--duration", "0.6", "--status-every", "0.1", "--shm-prefix",
+                                 f"hapfluid-test-threads-{threads}-{os.getpid()}", "--out", str(out)],
+                                capture_output=True, text=True, timeout=60)
+        assert result.returncode == 0, result.stderr
+        stats = json.loads((out / "stats.json").read_text())
+        choice = stats["thread_choice"]
+        assert choice["steps_with_all"] + choice["steps_with_one"] == stats["steps"] > 0
+        assert choice["chosen"] in (1, int(threads))
+        status = [l for l in result.stderr.splitlines() if l.startswith("haptic-sim: t = ")]
+        assert status and all(" thread(s), " in l for l in status), result.stderr
+        if threads == "1":
+            assert choice == {"chosen": 1, "probes": 0, "steps_with_all": stats["steps"], "steps_with_one": 0}
+        else:
+            assert choice["steps_with_one"] > 0 and choice["steps_with_all"] > 0  # the first probe ran

@@ -99,6 +99,8 @@ class DfsphSolver final : public Solver {
   double time_s() const override { return time_s_; }
   std::uint64_t steps() const override { return steps_; }
   int threads() const override { return pool_.size(); }
+  void set_active_threads(int n) override { pool_.set_active(n); }
+  int active_threads() const override { return pool_.active(); }
   PhaseTimes phase_times() const override { return times_; }
   SolverIterations iterations() const override { return iterations_; }
   std::uint64_t clamped_particle_count() const override { return clamped_; }

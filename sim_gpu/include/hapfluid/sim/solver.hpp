@@ -84,6 +84,10 @@ class Solver {
   const char* method() const { return config::to_string(params().solver); }  // "dfsph" or "wcsph"
   virtual ComputeDevice device() const = 0;
   virtual int threads() const = 0;  // CPU worker threads (0 on Vulkan: the driver's own)
+  // How many of the worker threads the next steps use, 1..threads(); the same results for any
+  // count (thread_pool.hpp). No effect on Vulkan.
+  virtual void set_active_threads(int) {}
+  virtual int active_threads() const { return threads(); }
 };
 
 // The CPU solver of the model's method (params.solver).

@@ -43,6 +43,11 @@ class ThreadPool {
   ThreadPool& operator=(const ThreadPool&) = delete;
 
   int size() const { return threads_; }
+  // How many of the threads take part in the next jobs, 1..size() (clamped); the others sleep.
+  // Any count gives the same results (the slots are fixed), so a live sim may switch between
+  // jobs to whichever count runs faster beside the 1 kHz loop. Called by the owning thread only.
+  void set_active(int threads);
+  int active() const { return active_.load(std::memory_order_relaxed); }
   // How many slots every parallel_for cuts its range into: per-slot outputs are sized by it.
   int slots() const { return slots_; }
 
@@ -93,6 +98,7 @@ class ThreadPool {
   std::atomic<int> finished_{0};              // slots of the current job done
   std::atomic<unsigned long> generation_{0};  // wakes the helpers
   std::atomic<bool> stopping_{false};
+  std::atomic<int> active_{1};
 };
 
 }  // namespace hapfluid::sim
