@@ -178,3 +178,38 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   // Within 5% (measured +1-2% on either backend; +7-9% without the first-moment correction).
   EXPECT_NEAR(gradient, rho0 * g, 0.05 * rho0 * g);
 }
+
+// Water at rest on the default solver (config/scenes/hydrostatic_tank.toml: DFSPH, 0.001 Pa s,
+// 5 ms steps, settled from its start lattice): the volume-mapped walls alone hold it (no clamp
+// event, no particle lost), and it stays at its rest density. The density solve stops
+// once the mean compression it predicts for the step is below fluid.density_error_percent
+// (0.1 %), so the mean density error over the run is below that too; single particles stray
+// further (1-1.5 % above rest in the settled packing). Not held yet: its particles keep moving
+// at ~0.04 m/s rms, where 0.01 m/s is the target (sim_gpu/README.md).
+TEST(Hydrostatic, DfsphWaterStaysInItsTankAtRestDensity) {
+  const auto scene = config::load_scene("config/scenes/hydrostatic_tank.toml");
+  const auto solver_ptr = make_cpu_solver(build_model(scene), 2);
+  Solver& solver = *solver_ptr;
+  ASSERT_STREQ(solver.method(), "dfsph");
+  ASSERT_LE(scene.fluid.viscosity_pa_s, 0.001);
+  const auto& f = solver.model().fluid;
+  const std::size_t count = f.size();
+  const double rho0 = scene.fluid.rest_density_kg_m3;
+  const int snapshots = static_cast<int>(std::lround(scene.duration_s / 0.1));
+  double mean_error = 0;
+  for (int k = 0; k < snapshots; ++k) {
+    test::run_for(solver, 0.1, 0.1);
+    solver.sync_and_check_finite();
+    double sum = 0;
+    for (float rho : f.density) sum += rho / rho0 - 1;
+    mean_error += sum / static_cast<double>(f.size()) / snapshots;
+  }
+  std::cout << "dfsph tank at rest: mean density error " << 100 * mean_error << " % over " << scene.duration_s
+            << " s, " << solver.steps() << " steps, clamp events " << solver.clamped_particle_count() << "\n";
+  EXPECT_LT(mean_error, scene.fluid.density_error_percent / 100);
+  EXPECT_GT(mean_error, -scene.fluid.density_error_percent / 100);
+  // A particle that reaches the last-resort clamp planes (within the walls' reach) is put back
+  // and counted: none did.
+  EXPECT_EQ(solver.clamped_particle_count(), 0u);
+  EXPECT_EQ(f.size(), count);
+}
