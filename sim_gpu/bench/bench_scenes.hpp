@@ -32,7 +32,7 @@ inline config::Scene pool_scene(const std::filesystem::path& dir, int pool_parti
   t << "name = \"pool\"\n[domain]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, 0.5]\n"
     << "[fluid]\nparticle_spacing_m = " << s << "\n"
     << (dfsph ? "solver = \"dfsph\"\nsettle_s = 0.0\nviscosity_pa_s = 0.001\n"
-              : "speed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n")
+              : "solver = \"wcsph\"\nspeed_of_sound_m_s = 20.0\nviscosity_pa_s = 0.5\n")
     << "[[fluid.blocks]]\nmin_m = [0.0, 0.0, 0.0]\nmax_m = [1.0, 1.0, " << depth << "]\n";
   for (std::size_t i = 0; i < bodies.size(); ++i) {
     config::save_obj(primitives::sphere_mesh(bodies[i].radius, 5), dir / ("sphere" + std::to_string(i) + ".obj"));

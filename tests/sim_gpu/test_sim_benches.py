@@ -1,0 +1,40 @@
+"""The simulator benchmarks run (`make bench` is not part of `make test`, so a change that breaks
+one would otherwise go unseen): bench_sim_cpu and bench_sim_vulkan in their --quick form write
+their JSON records, and each pool is stepped by the method its sweep names (a scene that leaves
+fluid.solver out gets the schema's default, which the Vulkan backend does not run)."""
+import json
+import subprocess
+
+import pytest
+
+from conftest import BUILD_DIR
+
+
+def run_bench(name, out):
+    path = BUILD_DIR / "bench" / name
+    if not path.exists():
+        pytest.skip(f"{path} not built")
+    result = subprocess.run([str(path), "--quick", "--out", str(out)], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    return json.loads(out.read_text())
+
+
+def test_bench_sim_cpu_steps_each_pool_with_its_named_method(tmp_path):
+    records = run_bench("bench_sim_cpu", tmp_path / "cpu.json")
+    pools = [r for r in records if r["params"]["sweep"] == "pool"]
+    for solver in ("wcsph", "dfsph"):
+        threads = {r["params"]["threads"] for r in pools if r["params"]["solver"] == solver}
+        assert threads == {1, 2}, f"{solver}: pools on {threads} threads"
+        scaling = [r for r in records if r["params"]["sweep"] == "scaling" and r["params"]["solver"] == solver]
+        assert len(scaling) == 1 and scaling[0]["metrics"]["speedup_2_threads"] > 0
+    # The wcsph pools have no pressure solve, the dfsph pools iterate theirs.
+    for r in pools:
+        iterations = r["metrics"]["density_iterations_per_step"]
+        assert (iterations == 0) == (r["params"]["solver"] == "wcsph"), r
+    assert all(r["metrics"]["steps_per_s"] > 0 for r in records if "steps_per_s" in r["metrics"])
+
+
+def test_bench_sim_vulkan_runs_its_pools_and_figures(tmp_path):
+    records = run_bench("bench_sim_vulkan", tmp_path / "vulkan.json")
+    assert {r["params"]["sweep"] for r in records} == {"pool", "fig6b", "fig6c"}
+    assert all(r["params"]["backend"] == "vulkan" and r["metrics"]["steps_per_s"] > 0 for r in records)
