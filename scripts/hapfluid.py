@@ -455,6 +455,12 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
         summary["real_time_factor"] = round(stats["real_time_factor"], 3)
         summary["sim_kept_up"] = stats["kept_up_with_wall_clock"]
         summary["sim_step_load"] = round(stats["step_load"], 3)
+        choice = stats.get("thread_choice")
+        if choice and stats.get("threads", 0) > 1:
+            # The live sim steps with all its threads or one, whichever it measured faster.
+            steps = max(choice["steps_with_all"] + choice["steps_with_one"], 1)
+            summary["sim_threads"] = stats["threads"]
+            summary["sim_steps_on_one_thread"] = round(choice["steps_with_one"] / steps, 3)
         summary["fluid_particles"] = stats["particles"]["fluid"]
         summary["sim_backend"] = stats.get("backend", "cpu")
         summary["sim_device"] = stats.get("device", {}).get("name", "")
@@ -527,6 +533,9 @@ def print_summary(summary):
         print(f"  sim: {summary['sim_steps_per_s']} steps/s, real-time factor {summary['real_time_factor']} "
               f"({kept}), {summary['fluid_particles']} fluid particles, steps took "
               f"{summary['sim_step_load']:.0%} of the wall clock")
+        if "sim_threads" in summary:
+            print(f"  sim: {1 - summary['sim_steps_on_one_thread']:.0%} of its steps on {summary['sim_threads']} threads, "
+                  f"{summary['sim_steps_on_one_thread']:.0%} on one (it keeps the faster beside the loop)")
     print(f"  rendered frames: {summary.get('rendered_frames', 0)}, VTK particle frames: {summary.get('vtk_frames', 0)}")
     w, ct = summary.get("wake_latency_us"), summary.get("cyclictest_us")
 

@@ -72,6 +72,12 @@ def test_a_short_live_run_leaves_its_outputs_and_nothing_else(build_dir, tmp_pat
     # (a step that outlasts the run's wall clock cannot happen), printed beside the real-time factor.
     assert 0 < summary["sim_step_load"] <= 1.0
     assert f"{summary['sim_step_load']:.0%} of the wall clock" in result.stdout
+    # With more than one thread the live sim steps with all or one, whichever it measured faster
+    # (thread_choice.hpp): the summary gives the share on one.
+    stats = json.loads((out / "sim/stats.json").read_text())
+    if stats["backend"] == "cpu" and stats["threads"] > 1:
+        assert 0 <= summary["sim_steps_on_one_thread"] <= 1 and summary["sim_threads"] == stats["threads"]
+        assert f"{summary['sim_steps_on_one_thread']:.0%} on one" in result.stdout
     # --no-cyclictest: the loop's latency alone, said so; no cyclictest output left behind.
     assert summary["cyclictest_us"] is None and "no cyclictest" in result.stdout
     assert not (out / "cyclictest.txt").exists()
