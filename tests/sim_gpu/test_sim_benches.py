@@ -7,11 +7,9 @@ import subprocess
 
 import pytest
 
-from conftest import BUILD_DIR
 
-
-def run_bench(name, out):
-    path = BUILD_DIR / "bench" / name
+def run_bench(build_dir, name, out):
+    path = build_dir / "bench" / name
     if not path.exists():
         pytest.skip(f"{path} not built")
     result = subprocess.run([str(path), "--quick", "--out", str(out)], capture_output=True, text=True, timeout=300)
@@ -19,8 +17,8 @@ def run_bench(name, out):
     return json.loads(out.read_text())
 
 
-def test_bench_sim_cpu_steps_each_pool_with_its_named_method(tmp_path):
-    records = run_bench("bench_sim_cpu", tmp_path / "cpu.json")
+def test_bench_sim_cpu_steps_each_pool_with_its_named_method(build_dir, tmp_path):
+    records = run_bench(build_dir, "bench_sim_cpu", tmp_path / "cpu.json")
     pools = [r for r in records if r["params"]["sweep"] == "pool"]
     for solver in ("wcsph", "dfsph"):
         threads = {r["params"]["threads"] for r in pools if r["params"]["solver"] == solver}
@@ -34,7 +32,7 @@ def test_bench_sim_cpu_steps_each_pool_with_its_named_method(tmp_path):
     assert all(r["metrics"]["steps_per_s"] > 0 for r in records if "steps_per_s" in r["metrics"])
 
 
-def test_bench_sim_vulkan_runs_its_pools_and_figures(tmp_path):
-    records = run_bench("bench_sim_vulkan", tmp_path / "vulkan.json")
+def test_bench_sim_vulkan_runs_its_pools_and_figures(build_dir, tmp_path):
+    records = run_bench(build_dir, "bench_sim_vulkan", tmp_path / "vulkan.json")
     assert {r["params"]["sweep"] for r in records} == {"pool", "fig6b", "fig6c"}
     assert all(r["params"]["backend"] == "vulkan" and r["metrics"]["steps_per_s"] > 0 for r in records)
