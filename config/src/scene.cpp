@@ -383,6 +383,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
   if (auto f = vessels ? r.table("fluid") : std::nullopt) {
     auto blocks = f->tables("blocks");
     if (blocks.size() != scene.fluid.blocks.size()) blocks.clear();  // already reported
+    const Vec3 g = scene.fluid.gravity_m_s2;
+    const bool weightless = g.x == 0 && g.y == 0 && g.z == 0;
     for (std::size_t i = 0; i < blocks.size(); ++i) {
       const std::string& vessel = scene.fluid.blocks[i].vessel;
       if (vessel.empty()) continue;
@@ -391,12 +393,8 @@ Scene parse_scene(const std::string& text, const std::filesystem::path& file) {
         blocks[i].problem("vessel", "no [[bodies]] entry is named \"" + vessel + "\"");
       else if (body->shape == BodyShape::particle)
         blocks[i].problem("vessel", "body \"" + vessel + "\" is a particle; a vessel is a body with a mesh");
+      if (weightless) blocks[i].problem("vessel", "needs gravity to say which way is down (fluid.gravity_m_s2 is zero)");
     }
-    const Vec3 g = scene.fluid.gravity_m_s2;
-    if (g.x == 0 && g.y == 0 && g.z == 0)
-      for (std::size_t i = 0; i < blocks.size(); ++i)
-        if (!scene.fluid.blocks[i].vessel.empty())
-          blocks[i].problem("vessel", "needs gravity to say which way is down (fluid.gravity_m_s2 is zero)");
   }
   names.clear();
   for (auto& d : r.tables("devices")) {

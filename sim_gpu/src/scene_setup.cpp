@@ -376,7 +376,8 @@ SimulationModel build_model(const config::Scene& scene) {
       const PlacedMesh* vessel = nullptr;
       for (const PlacedMesh& pm : placed)
         if (!scene.fluid.blocks[bi].vessel.empty() && pm.name == scene.fluid.blocks[bi].vessel) vessel = &pm;
-      const Vec3 vessel_down = vessel ? transpose(rotation_matrix(vessel->orientation)) * down : Vec3{};
+      const Mat3 to_vessel = vessel ? transpose(rotation_matrix(vessel->orientation)) : Mat3{};
+      const Vec3 vessel_down = to_vessel * down;
       for (double z = b.min_m.z + 0.5 * s; z < b.max_m.z; z += s)
         for (double y = b.min_m.y + 0.5 * s; y < b.max_m.y; y += s)
           for (double x = b.min_m.x + 0.5 * s; x < b.max_m.x; x += s) {
@@ -387,7 +388,7 @@ SimulationModel build_model(const config::Scene& scene) {
             }
             if (taken) continue;
             if (vessel) {
-              const Vec3 local = transpose(rotation_matrix(vessel->orientation)) * (Vec3{x, y, z} - vessel->origin);
+              const Vec3 local = to_vessel * (Vec3{x, y, z} - vessel->origin);
               if (ray_crossings(vessel->vertices, vessel->mesh, local, vessel_down) == 0) continue;
             }
             const float fx = static_cast<float>(x), fy = static_cast<float>(y), fz = static_cast<float>(z);
