@@ -23,6 +23,7 @@
 #include "hapfluid/rt/sd_notify.hpp"
 #include "hapfluid/shm/channel.hpp"
 #include "hapfluid/sim/outputs.hpp"
+#include "hapfluid/sim/run_stats.hpp"
 #include "live_backend.hpp"
 
 namespace hapfluid::sim {
@@ -131,11 +132,10 @@ std::string clamp_note(std::uint64_t clamped) {
   return clamped > 0 ? ", " + std::to_string(clamped) + " wall clamps" : std::string();
 }
 
-std::string probe_json(const BackendProbe& p) {
-  if (!p.ran) return "null";
-  return "{\"steps\": " + std::to_string(p.steps) + ", \"simulated_s\": " + num(p.simulated_s) + ", \"wall_s\": " +
-         num(p.wall_s) + ", \"steps_per_s\": " + num(p.steps_per_s()) + ", \"real_time_factor\": " +
-         num(p.real_time_factor()) + "}";
+StatsJson probe_json(const BackendProbe& p) {
+  if (!p.ran) return nullptr;
+  return {{"steps", p.steps}, {"simulated_s", p.simulated_s}, {"wall_s", p.wall_s}, {"steps_per_s", p.steps_per_s()},
+          {"real_time_factor", p.real_time_factor()}};
 }
 
 std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const Counters& c, const ThreadChoice& threads,
@@ -146,49 +146,54 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
   const SimulationModel& m = solver.model();
   const double steps = static_cast<double>(solver.steps());
   const double wall = std::max(wall_s, 1e-9);
-  std::ostringstream j;
-  j << "{\n  \"mode\": \"live\",\n  \"complete\": " << (complete ? "true" : "false") << ",\n";
-  if (!error.empty()) j << "  \"error\": \"" << json_escape(error) << "\",\n";
-  j << "  \"build_id\": \"" << json_escape(config::build_id()) << "\",\n"
-    << "  \"scene\": \"" << json_escape(o.scene.string()) << "\",\n"
-    << "  \"backend\": \"" << solver.backend() << "\",\n"
-    << "  \"device\": {\"name\": \"" << json_escape(device.name) << "\", \"type\": \"" << json_escape(device.type)
-    << "\", \"driver\": \"" << json_escape(device.driver) << "\"},\n"
-    << "  \"backend_choice\": {\"requested\": \"" << json_escape(backend.requested) << "\", \"reason\": \""
-    << json_escape(backend.reason) << "\", \"vulkan_probe\": " << probe_json(backend.vulkan_probe)
-    << ", \"cpu_probe\": " << probe_json(backend.cpu_probe) << "},\n"
-    << "  \"threads\": " << solver.threads() << ",\n"
-    // Steps at all worker threads and at one, as the live sim chose them (thread_choice.hpp).
-    << "  \"thread_choice\": {\"chosen\": " << threads.chosen() << ", \"probes\": " << threads.probes()
-    << ", \"steps_with_all\": " << threads.steps_with_all() << ", \"steps_with_one\": " << threads.steps_with_one()
-    << "},\n"
-    << "  \"particles\": {\"fluid\": " << m.fluid.size() << ", \"boundary\": " << m.wall_particle_count
-    << ", \"static_body\": " << m.static_body_particle_count << ", \"body\": " << m.body_particles.size() << "},\n"
-    << "  \"fluid_mass_kg\": " << num(static_cast<double>(m.fluid.size()) * m.params.fluid_particle_mass_kg) << ",\n"
-    << "  \"solver\": \"" << solver.method() << "\",\n"
-    << "  \"steps\": " << solver.steps() << ",\n"
-    << "  \"clamped_particle_events\": " << solver.clamped_particle_count() << ",\n"
-    << "  \"dt_s\": {\"min\": " << num(c.dt_min < 1e300 ? c.dt_min : 0) << ", \"max\": " << num(c.dt_max)
-    << ", \"mean\": " << num(steps > 0 ? solver.time_s() / steps : 0) << "},\n"
-    << "  \"simulated_time_s\": " << num(solver.time_s()) << ",\n  \"wall_time_s\": " << num(wall_s) << ",\n"
-    << "  \"steps_per_s\": " << num(steps / wall) << ",\n"
-    << "  \"real_time_factor\": " << num(solver.time_s() / wall) << ",\n"
-    << "  \"kept_up_with_wall_clock\": " << (c.lag_events == 0 ? "true" : "false") << ",\n"
-    << "  \"dropped_backlog_s\": " << num(c.dropped_backlog_s) << ",\n"
-    << "  \"longest_step_wall_s\": " << num(c.step_wall_max_s) << ",\n"
-    // The share of the wall clock the steps took: the sim's headroom is what is left of 1.
-    << "  \"step_load\": " << num(c.step_wall_total_s / wall) << ",\n"
-    << "  \"sim_samples_published\": " << c.samples << ",\n"
-    << "  \"particle_frames_published\": " << c.particle_frames << ",\n"
-    << "  \"vtk_export_every_s\": " << num(o.export_every_s) << ",\n"
-    << "  \"vtk_frames_written\": " << c.vtk_frames << ",\n"
-    << "  \"longest_vtk_write_s\": " << num(c.vtk_write_max_s) << ",\n"
-    << "  \"vtk_write_total_s\": " << num(c.vtk_write_total_s) << ",\n";
-  if (!c.vtk_error.empty()) j << "  \"vtk_export_error\": \"" << json_escape(c.vtk_error) << "\",\n";
-  j << "  \"device_records_read\": " << c.device_records << ",\n  \"device_matches\": [";
-  for (std::size_t i = 0; i < device_map.size(); ++i) j << (i ? ", " : "") << "\"" << json_escape(device_map[i]) << "\"";
-  j << "]\n}\n";
-  return j.str();
+  StatsJson j;
+  j["mode"] = "live";
+  j["complete"] = complete;
+  if (!error.empty()) j["error"] = error;
+  j["build_id"] = config::build_id();
+  j["scene"] = o.scene.string();
+  j["backend"] = solver.backend();
+  j["device"] = {{"name", device.name}, {"type", device.type}, {"driver", device.driver}};
+  j["backend_choice"] = {{"requested", backend.requested},
+                         {"reason", backend.reason},
+                         {"vulkan_probe", probe_json(backend.vulkan_probe)},
+                         {"cpu_probe", probe_json(backend.cpu_probe)}};
+  j["threads"] = solver.threads();
+  // Steps at all worker threads and at one, as the live sim chose them (thread_choice.hpp).
+  j["thread_choice"] = {{"chosen", threads.chosen()},
+                        {"probes", threads.probes()},
+                        {"steps_with_all", threads.steps_with_all()},
+                        {"steps_with_one", threads.steps_with_one()}};
+  j["particles"] = {{"fluid", m.fluid.size()},
+                    {"boundary", m.wall_particle_count},
+                    {"static_body", m.static_body_particle_count},
+                    {"body", m.body_particles.size()}};
+  j["fluid_mass_kg"] = static_cast<double>(m.fluid.size()) * m.params.fluid_particle_mass_kg;
+  j["solver"] = solver.method();
+  j["steps"] = solver.steps();
+  j["clamped_particle_events"] = solver.clamped_particle_count();
+  j["dt_s"] = {{"min", c.dt_min < 1e300 ? c.dt_min : 0.0},
+               {"max", c.dt_max},
+               {"mean", steps > 0 ? solver.time_s() / steps : 0.0}};
+  j["simulated_time_s"] = solver.time_s();
+  j["wall_time_s"] = wall_s;
+  j["steps_per_s"] = steps / wall;
+  j["real_time_factor"] = solver.time_s() / wall;
+  j["kept_up_with_wall_clock"] = c.lag_events == 0;
+  j["dropped_backlog_s"] = c.dropped_backlog_s;
+  j["longest_step_wall_s"] = c.step_wall_max_s;
+  // The share of the wall clock the steps took: the sim's headroom is what is left of 1.
+  j["step_load"] = c.step_wall_total_s / wall;
+  j["sim_samples_published"] = c.samples;
+  j["particle_frames_published"] = c.particle_frames;
+  j["vtk_export_every_s"] = o.export_every_s;
+  j["vtk_frames_written"] = c.vtk_frames;
+  j["longest_vtk_write_s"] = c.vtk_write_max_s;
+  j["vtk_write_total_s"] = c.vtk_write_total_s;
+  if (!c.vtk_error.empty()) j["vtk_export_error"] = c.vtk_error;
+  j["device_records_read"] = c.device_records;
+  j["device_matches"] = device_map;
+  return config::json_text(j);
 }
 
 }  // namespace

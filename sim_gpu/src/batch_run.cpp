@@ -36,7 +36,7 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
                             {"pressure_solve", per_step_ms(t.pressure_s, steps)},
                             {"bodies", per_step_ms(t.bodies_s, steps)},
                             {"integration", per_step_ms(t.integration_s, steps)}};
-  return stats_text(j);
+  return config::json_text(j);
 }
 
 }  // namespace

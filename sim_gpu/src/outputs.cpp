@@ -153,16 +153,15 @@ VtkFrameSeries::VtkFrameSeries(std::filesystem::path dir, double interval_s)
 }
 
 void VtkFrameSeries::write(const SimulationModel& model, double time_s) {
-  auto add = [&](const char* pattern, std::string& entries, const char* series,
+  // ParaView's file series: {"file-series-version": "1.0", "files": [{"name", "time"}, ...]}.
+  auto add = [&](const char* pattern, config::Json& series_json, const char* series,
                  void (*writer)(const std::filesystem::path&, const SimulationModel&, double)) {
     char name[64];
     std::snprintf(name, sizeof name, pattern, written_);
     writer(dir_ / name, model, time_s);
-    char entry[128];
-    std::snprintf(entry, sizeof entry, "%s\n    {\"name\": \"%s\", \"time\": %.9g}", entries.empty() ? "" : ",", name, time_s);
-    entries += entry;
-    write_text_atomically(dir_ / series,
-                          "{\n  \"file-series-version\": \"1.0\",\n  \"files\": [" + entries + "\n  ]\n}\n");
+    if (series_json.is_null()) series_json = {{"file-series-version", "1.0"}, {"files", config::Json::array()}};
+    series_json["files"].push_back({{"name", name}, {"time", time_s}});
+    write_text_atomically(dir_ / series, config::json_text(series_json));
   };
   add("frame_%06d.vtk", series_entries_, "particles.vtk.series", write_vtk_frame);
   if (!model.bodies.empty()) add("bodies_%06d.vtk", body_series_entries_, "bodies.vtk.series", write_vtk_bodies);
@@ -218,15 +217,5 @@ std::string coupling_row(const SimulationModel& m, const VirtualCoupling& c, dou
          "," + csv_vec3(c.device_torque);
 }
 
-std::string json_escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\', out += c;
-    else if (c == '\n') out += "\\n";
-    else if (static_cast<unsigned char>(c) < 0x20) out += ' ';
-    else out += c;
-  }
-  return out;
-}
 
 }  // namespace hapfluid::sim

@@ -36,6 +36,4 @@ StatsJson batch_stats(const RunRecord& run, const std::string& backend) {
   return j;
 }
 
-std::string stats_text(const StatsJson& stats) { return stats.dump(2) + "\n"; }
-
 }  // namespace hapfluid::sim

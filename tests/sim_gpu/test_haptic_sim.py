@@ -252,6 +252,19 @@ def test_rerun_that_succeeds_keeps_no_frame_of_the_previous_run(binary, tmp_path
     assert not list(out.rglob("*.part"))
 
 
+def test_a_scene_path_that_is_not_utf8_still_gives_a_readable_stats_file(binary, tmp_path):
+    # Linux file names are bytes: a folder named in Latin-1 ("caf\xe9") is a valid path that JSON
+    # cannot carry as it is. The run completes and its stats.json parses, the byte replaced.
+    folder = pathlib.Path(os.fsdecode(bytes(tmp_path) + b"/caf\xe9"))
+    scene = write_scene(folder)
+    out = tmp_path / "out"
+    result = run(binary, scene, out, "--export-every", "0", "--duration", "0.01")
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((out / "stats.json").read_bytes().decode("utf-8"))
+    assert stats["complete"] is True
+    assert stats["scene"].endswith("caf\ufffd/scene.toml")
+
+
 def test_missing_arguments_print_usage(binary):
     result = subprocess.run([str(binary("haptic-sim"))], capture_output=True, text=True)
     assert result.returncode == 2

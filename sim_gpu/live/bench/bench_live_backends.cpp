@@ -7,12 +7,12 @@
 #include <unistd.h>
 
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/outputs.hpp"
 #include "live_backend.hpp"
@@ -26,21 +26,14 @@ std::string num(double v) { return sim::csv_number(v); }
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"Live-mode speed of each backend on the shipped live scenes; JSON records to --out.",
+               "bench_live_backends"};
+  config::apply_convention(app);
   std::string out;
   bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--quick") quick = true;
-    else {
-      std::cerr << "usage: bench_live_backends --out FILE.json [--quick]\n";
-      return 2;
-    }
-  }
-  if (out.empty()) {
-    std::cerr << "bench_live_backends: --out FILE.json is required\n";
-    return 2;
-  }
+  app.add_option("--out", out, "JSON records (a list) to this file")->required();
+  app.add_flag("--quick", quick, "shorter probes, for tests");
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
   const std::filesystem::path source = HAPFLUID_SOURCE_DIR;
   // The shipped stirring scene is divergence-free (cpu only); its weakly compressible twin is
   // the same workload for the Vulkan backend.
@@ -54,7 +47,7 @@ int main(int argc, char** argv) {
   const int cores = static_cast<int>(std::max(1L, sysconf(_SC_NPROCESSORS_ONLN)));
   const std::vector<Run> runs = {{"cpu", 1}, {"cpu", cores}, {"vulkan", 0}};
   const double simulated_s = quick ? 0.3 : 1.0, wall_cap_s = quick ? 1.0 : 3.0;
-  std::vector<std::string> records;
+  std::vector<config::Json> records;
   for (const auto& path : scenes) {
     config::Scene scene;
     try {
@@ -80,22 +73,21 @@ int main(int argc, char** argv) {
       std::cerr << "bench_live_backends: " << scene.name << " on " << r.backend << " (" << solver->device().name
                 << "): " << num(p.steps_per_s()) << " steps/s, needs " << num(needed) << ", real-time factor "
                 << num(p.real_time_factor()) << "\n";
-      std::ostringstream j;
-      j << "{\"bench\": \"live_backends\", \"params\": {\"scene\": \"" << sim::json_escape(scene.name)
-        << "\", \"backend\": \"" << r.backend << "\", \"device\": \"" << sim::json_escape(solver->device().name)
-        << "\", \"threads\": " << solver->threads() << ", \"fluid_particles\": " << model.fluid.size()
-        << ", \"body_particles\": " << model.body_particles.size() << "}, \"metrics\": {\"steps_per_s\": "
-        << num(p.steps_per_s()) << ", \"needed_steps_per_s\": " << num(needed) << ", \"ms_per_step\": "
-        << num(p.steps ? 1000.0 * p.wall_s / double(p.steps) : 0) << ", \"real_time_factor\": "
-        << num(p.real_time_factor()) << ", \"simulated_s\": " << num(p.simulated_s) << "}}";
-      records.push_back(j.str());
+      records.push_back(config::bench_record(
+          "live_backends",
+          {{"scene", scene.name}, {"backend", r.backend}, {"device", solver->device().name},
+           {"threads", solver->threads()}, {"fluid_particles", model.fluid.size()},
+           {"body_particles", model.body_particles.size()}},
+          {{"steps_per_s", p.steps_per_s()}, {"needed_steps_per_s", needed},
+           {"ms_per_step", p.steps ? 1000.0 * p.wall_s / double(p.steps) : 0.0},
+           {"real_time_factor", p.real_time_factor()}, {"simulated_s", p.simulated_s}}));
     }
   }
-  std::ofstream f(out + ".part");
-  f << "[\n";
-  for (std::size_t i = 0; i < records.size(); ++i) f << "  " << records[i] << (i + 1 < records.size() ? ",\n" : "\n");
-  f << "]\n";
-  f.close();
-  std::filesystem::rename(out + ".part", out);
+  try {
+    config::write_json_atomically(out, records);
+  } catch (const std::exception& e) {
+    std::cerr << "bench_live_backends: " << e.what() << "\n";
+    return 1;
+  }
   return 0;
 }

@@ -37,7 +37,7 @@ std::string stats_json(const VulkanSolver& solver, const BatchOptions& o, const 
   j["vulkan_validation"] = {{"enabled", solver.context().validation_enabled()},
                             {"warnings", counts.warnings},
                             {"errors", counts.errors}};
-  return stats_text(j);
+  return config::json_text(j);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <string>
 
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/sim/model.hpp"
 
 namespace hapfluid::sim {
@@ -38,7 +39,7 @@ class VtkFrameSeries {
   std::filesystem::path dir_;
   double interval_s_ = 0, next_s_ = 0;
   int written_ = 0;
-  std::string series_entries_, body_series_entries_;  // the "files" entries of each series so far
+  config::Json series_entries_, body_series_entries_;  // each series so far (ParaView .vtk.series)
 };
 
 // A CSV file written row by row to "<file>.part" and renamed to <file> by finish().
@@ -74,7 +75,5 @@ void write_text_atomically(const std::filesystem::path& file, const std::string&
 // the frames in particles/ (*.vtk, *.part). A run calls it once its scene has loaded and built,
 // just before it writes: a scene that fails leaves the previous run's outputs untouched.
 void remove_previous_outputs(const std::filesystem::path& dir);
-
-std::string json_escape(const std::string& text);
 
 }  // namespace hapfluid::sim

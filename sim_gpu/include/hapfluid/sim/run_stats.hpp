@@ -6,16 +6,15 @@
 #include <cstdint>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/sim/batch_run.hpp"
 #include "hapfluid/sim/model.hpp"
 #include "hapfluid/sim/solver.hpp"
 
 namespace hapfluid::sim {
 
-// Keys in the order written (a person reads the file).
-using StatsJson = nlohmann::ordered_json;
+// Keys in the order written (a person reads the file); config::json_text makes the text.
+using StatsJson = config::Json;
 
 struct RunRecord {
   const SimulationModel* model = nullptr;
@@ -35,8 +34,5 @@ StatsJson batch_stats(const RunRecord& run, const std::string& backend);
 
 // Milliseconds per step of a phase's total seconds over `steps` (0 before the first step).
 double per_step_ms(double total_s, double steps);
-
-// The JSON text of `stats`, indented, ending in a newline.
-std::string stats_text(const StatsJson& stats);
 
 }  // namespace hapfluid::sim
