@@ -9,12 +9,15 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/device/loopback.hpp"
 #include "hapfluid/device/message_link.hpp"
 
@@ -84,36 +87,33 @@ std::vector<double> run(Framing framing, int iterations) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"Round trip of the transport and codec alone, per framing; JSON records to --out.",
+               "firmware_bridge_loopback_ping_pong"};
+  hapfluid::config::apply_convention(app);
   std::string out;
   int iterations = 20000;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (std::string(argv[i]) == "--out") out = argv[i + 1];
-    else if (std::string(argv[i]) == "--iterations") iterations = std::atoi(argv[i + 1]);
-  }
-  if (out.empty()) {
-    std::fprintf(stderr, "usage: %s --out FILE.json [--iterations N]\n", argv[0]);
-    return 2;
-  }
-  std::string json = "[";
+  app.add_option("--out", out, "JSON records (a list) to this file")->required();
+  app.add_option("--iterations", iterations, "round trips timed per framing")->check(CLI::Range(1, 100000000));
+  if (const int code = hapfluid::config::parse_command_line(app, argc, argv); code >= 0) return code;
+  std::vector<hapfluid::config::Json> records;
   for (Framing f : {Framing::can, Framing::canfd, Framing::hid, Framing::bulk}) {
     std::vector<double> r = run(f, iterations);
-    auto pct = [&](double p) { return r.empty() ? -1.0 : r[std::min(r.size() - 1, static_cast<std::size_t>(p * r.size()))]; };
+    // No sample (every reply lost): NaN, which the JSON writes null.
+    auto pct = [&](double p) {
+      return r.empty() ? std::nan("") : r[std::min(r.size() - 1, static_cast<std::size_t>(p * r.size()))];
+    };
     std::fprintf(stderr, "loopback ping-pong %-5s p50 %.1f us, p99 %.1f us (%zu samples)\n", to_string(f), pct(0.5),
                  pct(0.99), r.size());
-    char record[512];
-    std::snprintf(record, sizeof record,
-                  "%s{\"bench\": \"firmware_bridge_loopback_ping_pong\", \"params\": {\"framing\": \"%s\", "
-                  "\"iterations\": %d}, \"metrics\": {\"rtt_p50_us\": %.2f, \"rtt_p99_us\": %.2f, \"samples\": %zu}}",
-                  json.size() > 1 ? ", " : "", to_string(f), iterations, pct(0.5), pct(0.99), r.size());
-    json += record;
+    records.push_back(hapfluid::config::bench_record("firmware_bridge_loopback_ping_pong",
+                                                     {{"framing", to_string(f)}, {"iterations", iterations}},
+                                                     {{"rtt_p50_us", pct(0.5)}, {"rtt_p99_us", pct(0.99)},
+                                                      {"samples", r.size()}}));
   }
-  json += "]\n";
-  FILE* f = std::fopen(out.c_str(), "w");
-  if (!f) {
-    std::perror(out.c_str());
+  try {
+    hapfluid::config::write_json_atomically(out, records);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "firmware_bridge_loopback_ping_pong: %s\n", e.what());
     return 1;
   }
-  std::fputs(json.c_str(), f);
-  std::fclose(f);
   return 0;
 }

@@ -6,10 +6,11 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <string>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/render/fluid_renderer.hpp"
 #include "hapfluid/render/synthetic_source.hpp"
 
@@ -22,7 +23,7 @@ struct Case {
   int filter_iterations;
 };
 
-std::string run_case(VulkanContext& ctx, const Case& c, int frames) {
+hapfluid::config::Json run_case(VulkanContext& ctx, const Case& c, int frames) {
   const double radius = 0.008;
   RenderSettings s;
   s.width = c.width;
@@ -59,57 +60,43 @@ std::string run_case(VulkanContext& ctx, const Case& c, int frames) {
   const double best = sorted.front();
   const double median = sorted[sorted.size() / 2];
   const double n = frames;
-  char json[1024];
-  std::snprintf(json, sizeof json,
-                "{\"bench\": \"bench_render\", \"params\": {\"particles\": %u, \"width\": %u, \"height\": %u, "
-                "\"filter_iterations\": %d, \"fluid_buffer_scale\": 0.5, \"device\": \"%s\"}, "
-                "\"metrics\": {\"ms_per_frame\": %.2f, \"frames_per_s\": %.2f, \"p95_ms_per_frame\": %.2f, "
-                "\"min_ms_per_frame\": %.2f, \"median_ms_per_frame\": %.2f, "
-                "\"gpu_ms_per_frame\": %.2f, \"scene_ms\": %.2f, \"splat_ms\": %.2f, \"filter_ms\": %.2f, "
-                "\"normals_ms\": %.2f, \"composite_ms\": %.2f, \"readback_ms\": %.2f}}",
-                c.particles, c.width, c.height, c.filter_iterations, ctx.properties().deviceName, mean(wall),
-                1000.0 / mean(wall), p95, best, median, mean(gpu), sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n,
-                sum.normals_ms / n, sum.composite_ms / n, sum.copy_out_ms / n);
+  const hapfluid::config::Json record = hapfluid::config::bench_record(
+      "bench_render",
+      {{"particles", c.particles}, {"width", c.width}, {"height", c.height}, {"filter_iterations", c.filter_iterations},
+       {"fluid_buffer_scale", 0.5}, {"device", std::string(ctx.properties().deviceName)}},
+      {{"ms_per_frame", mean(wall)}, {"frames_per_s", 1000.0 / mean(wall)}, {"p95_ms_per_frame", p95},
+       {"min_ms_per_frame", best}, {"median_ms_per_frame", median}, {"gpu_ms_per_frame", mean(gpu)},
+       {"scene_ms", sum.scene_ms / n}, {"splat_ms", sum.splat_ms / n}, {"filter_ms", sum.filter_ms / n},
+       {"normals_ms", sum.normals_ms / n}, {"composite_ms", sum.composite_ms / n}, {"readback_ms", sum.copy_out_ms / n}});
   std::fprintf(stderr,
                "bench_render: %u particles %ux%u, %d filter passes: %.1f ms/frame wall (%.1f frames/s, median %.1f, best %.1f), GPU %.1f ms = "
                "scene %.1f + splat %.1f + filter %.1f + normals %.1f + composite %.1f + read-back %.1f\n",
                c.particles, c.width, c.height, c.filter_iterations, mean(wall), 1000.0 / mean(wall), median, best, mean(gpu),
                sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n, sum.normals_ms / n, sum.composite_ms / n,
                sum.copy_out_ms / n);
-  return json;
+  return record;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"Milliseconds per frame of the fluid renderer on the paper's workload; JSON records to --out.",
+               "bench_render"};
+  hapfluid::config::apply_convention(app);
   std::string out;
   int frames = 20;
-  for (int i = 1; i < argc; ++i) {
-    if (!std::strcmp(argv[i], "--out") && i + 1 < argc) out = argv[++i];
-    else if (!std::strcmp(argv[i], "--frames") && i + 1 < argc) frames = std::max(1, std::atoi(argv[++i]));
-    else {
-      std::fprintf(stderr, "usage: bench_render --out FILE.json [--frames N]\n");
-      return 2;
-    }
-  }
+  app.add_option("--out", out, "JSON records (a list) to this file (default: stdout)");
+  app.add_option("--frames", frames, "frames timed per case")->check(CLI::Range(1, 100000));
+  if (const int code = hapfluid::config::parse_command_line(app, argc, argv); code >= 0) return code;
   try {
     VulkanContext ctx({false, {}, false});
-    std::vector<std::string> records;
+    std::vector<hapfluid::config::Json> records;
     records.push_back(run_case(ctx, {32768, 1024, 768, 4}, frames));  // the paper's workload
     records.push_back(run_case(ctx, {8192, 1024, 768, 4}, frames));
-    std::string json = "[\n";
-    for (size_t i = 0; i < records.size(); ++i) json += "  " + records[i] + (i + 1 < records.size() ? ",\n" : "\n");
-    json += "]\n";
-    if (out.empty()) {
-      std::fputs(json.c_str(), stdout);
-    } else {
-      std::ofstream f(out);
-      f << json;
-      if (!f) {
-        std::fprintf(stderr, "bench_render: cannot write %s\n", out.c_str());
-        return 1;
-      }
-    }
+    if (out.empty())
+      std::fputs(hapfluid::config::json_text(records).c_str(), stdout);
+    else
+      hapfluid::config::write_json_atomically(out, records);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_render: %s\n", e.what());

@@ -10,14 +10,14 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
@@ -30,11 +30,11 @@ using namespace hapfluid::sim::bench;
 
 namespace {
 
-struct Record { std::string json; };
-std::vector<Record> records;
+std::vector<config::Json> records;
 
 // Returns the wall time per step, ms.
-double measure(const std::string& sweep, const config::Scene& scene, int threads, int steps, const std::string& extra_params) {
+double measure(const std::string& sweep, const config::Scene& scene, int threads, int steps,
+               const config::Json& extra_params = config::Json::object()) {
   const std::unique_ptr<Solver> made = make_cpu_solver(build_model(scene), threads);
   Solver& solver = *made;
   const double dt = solver.stable_time_step();
@@ -51,24 +51,20 @@ double measure(const std::string& sweep, const config::Scene& scene, int threads
   const std::size_t fluid = m.fluid.size(), body = m.body_particles.size();
   const double ms = 1000 * wall / steps;
   auto phase = [&](double a, double b) { return 1000 * (a - b) / steps; };
-  char buf[1536];
-  std::snprintf(buf, sizeof buf,
-                "{\"bench\": \"bench_sim_cpu\", \"params\": {\"backend\": \"cpu\", \"sweep\": \"%s\", \"particles\": %zu, "
-                "\"fluid_particles\": %zu, \"body_particles\": %zu, \"boundary_particles\": %zu, \"threads\": %d, "
-                "\"solver\": \"%s\", \"dt_s\": %.6g%s}, "
-                "\"metrics\": {\"steps_per_s\": %.3f, \"ms_per_step\": %.3f, \"particle_steps_per_s\": %.0f, "
-                "\"neighbour_search_ms\": %.3f, \"density_ms\": %.3f, \"forces_ms\": %.3f, \"bodies_ms\": %.3f, "
-                "\"integration_ms\": %.3f, \"pressure_ms\": %.3f, \"density_iterations_per_step\": %.2f, "
-                "\"divergence_iterations_per_step\": %.2f, \"viscosity_iterations_per_step\": %.2f}}",
-                sweep.c_str(), fluid + body, fluid, body, m.wall_particle_count, threads, solver.method(), dt,
-                extra_params.c_str(), steps / wall, ms,
-                steps * static_cast<double>(fluid + body) / wall, phase(after.neighbour_search_s, before.neighbour_search_s),
-                phase(after.density_s, before.density_s), phase(after.forces_s, before.forces_s),
-                phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s),
-                phase(after.pressure_s, before.pressure_s), per_step(it1.density_iterations, it0.density_iterations),
-                per_step(it1.divergence_iterations, it0.divergence_iterations),
-                per_step(it1.viscosity_iterations, it0.viscosity_iterations));
-  records.push_back({buf});
+  config::Json params = {{"backend", "cpu"}, {"sweep", sweep}, {"particles", fluid + body}, {"fluid_particles", fluid},
+                         {"body_particles", body}, {"boundary_particles", m.wall_particle_count}, {"threads", threads},
+                         {"solver", solver.method()}, {"dt_s", dt}};
+  params.update(extra_params);
+  records.push_back(config::bench_record(
+      "bench_sim_cpu", std::move(params),
+      {{"steps_per_s", steps / wall}, {"ms_per_step", ms}, {"particle_steps_per_s", steps * static_cast<double>(fluid + body) / wall},
+       {"neighbour_search_ms", phase(after.neighbour_search_s, before.neighbour_search_s)},
+       {"density_ms", phase(after.density_s, before.density_s)}, {"forces_ms", phase(after.forces_s, before.forces_s)},
+       {"bodies_ms", phase(after.bodies_s, before.bodies_s)}, {"integration_ms", phase(after.integration_s, before.integration_s)},
+       {"pressure_ms", phase(after.pressure_s, before.pressure_s)},
+       {"density_iterations_per_step", per_step(it1.density_iterations, it0.density_iterations)},
+       {"divergence_iterations_per_step", per_step(it1.divergence_iterations, it0.divergence_iterations)},
+       {"viscosity_iterations_per_step", per_step(it1.viscosity_iterations, it0.viscosity_iterations)}}));
   std::fprintf(stderr, "bench_sim_cpu: %-5s %s %6zu particles (%zu body), %d thread(s): %7.2f ms/step, %6.1f steps/s "
                "[grid %.2f, density %.2f, pressure %.2f, forces %.2f, bodies %.2f, integrate %.2f ms]\n",
                sweep.c_str(), solver.method(), fluid + body, body, threads, ms, steps / wall,
@@ -80,38 +76,27 @@ double measure(const std::string& sweep, const config::Scene& scene, int threads
 
 // The pool of n particles on 1 and 2 threads; with `scaling`, a record of the speed-up too.
 void measure_pool(const std::filesystem::path& dir, int n, bool dfsph, bool scaling, int steps) {
-  const double ms_1 = measure("pool", pool_scene(dir, n, n, {}, dfsph), 1, steps, "");
-  const double ms_2 = measure("pool", pool_scene(dir, n, n, {}, dfsph), 2, steps, "");
+  const double ms_1 = measure("pool", pool_scene(dir, n, n, {}, dfsph), 1, steps);
+  const double ms_2 = measure("pool", pool_scene(dir, n, n, {}, dfsph), 2, steps);
   if (!scaling) return;
   const char* solver = dfsph ? "dfsph" : "wcsph";
-  char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "{\"bench\": \"bench_sim_cpu\", \"params\": {\"backend\": \"cpu\", \"sweep\": \"scaling\", \"solver\": \"%s\", "
-                "\"particles_requested\": %d}, \"metrics\": {\"ms_per_step_1_thread\": %.3f, \"ms_per_step_2_threads\": %.3f, "
-                "\"speedup_2_threads\": %.3f}}",
-                solver, n, ms_1, ms_2, ms_1 / ms_2);
-  records.push_back({buf});
+  records.push_back(config::bench_record(
+      "bench_sim_cpu", {{"backend", "cpu"}, {"sweep", "scaling"}, {"solver", solver}, {"particles_requested", n}},
+      {{"ms_per_step_1_thread", ms_1}, {"ms_per_step_2_threads", ms_2}, {"speedup_2_threads", ms_1 / ms_2}}));
   std::fprintf(stderr, "bench_sim_cpu: %s pool of %d, 2 threads are %.2fx one\n", solver, n, ms_1 / ms_2);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"Steps per second of the CPU backend: fluid pools, fig. 6b and 6c; JSON records to --out.",
+               "bench_sim_cpu"};
+  config::apply_convention(app);
   std::string out;
   bool quick = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--quick") quick = true;
-    else {
-      std::cerr << "usage: bench_sim_cpu --out FILE.json [--quick]\n";
-      return 2;
-    }
-  }
-  if (out.empty()) {
-    std::cerr << "bench_sim_cpu: --out FILE.json is required\n";
-    return 2;
-  }
+  app.add_option("--out", out, "JSON records (a list) to this file")->required();
+  app.add_flag("--quick", quick, "the smallest sweep, for tests");
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
   const auto dir = std::getenv("BENCH_KEEP_DIR") ? std::filesystem::path(std::getenv("BENCH_KEEP_DIR"))
                                                 : std::filesystem::temp_directory_path() / ("bench_sim_cpu_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
@@ -128,7 +113,7 @@ int main(int argc, char** argv) {
       const double r = 0.15;
       std::vector<Body> bodies = {{0.5, 0.5, 0.2, r, sphere_spacing(n, r)}};
       measure("fig6b", matched_scene(dir, total, bodies), 2, steps,
-              ", \"bodies\": 1, \"body_particles_requested\": " + std::to_string(n));
+              {{"bodies", 1}, {"body_particles_requested", n}});
     }
     // Fig. 6c: 1..16 spheres sharing 8k body particles in a 25k-particle scene.
     const std::vector<int> counts = quick ? std::vector<int>{4} : std::vector<int>{1, 2, 4, 8, 16};
@@ -138,7 +123,7 @@ int main(int argc, char** argv) {
       const double spacing = sphere_spacing(8000 / k, r);
       std::vector<Body> bodies;
       for (int i = 0; i < k; ++i) bodies.push_back({(i % per_row + 0.5) * cell, (i / per_row + 0.5) * cell, 0.2, r, spacing});
-      measure("fig6c", matched_scene(dir, total, bodies), 2, steps, ", \"bodies\": " + std::to_string(k));
+      measure("fig6c", matched_scene(dir, total, bodies), 2, steps, {{"bodies", k}});
     }
   } catch (const std::exception& e) {
     std::cerr << "bench_sim_cpu: " << e.what() << "\n";
@@ -146,11 +131,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::filesystem::remove_all(dir);
-  std::ofstream f(out + ".part");
-  f << "[\n";
-  for (std::size_t i = 0; i < records.size(); ++i) f << "  " << records[i].json << (i + 1 < records.size() ? ",\n" : "\n");
-  f << "]\n";
-  f.close();
-  std::filesystem::rename(out + ".part", out);
+  try {
+    config::write_json_atomically(out, records);
+  } catch (const std::exception& e) {
+    std::cerr << "bench_sim_cpu: " << e.what() << "\n";
+    return 1;
+  }
   return 0;
 }

@@ -74,3 +74,33 @@ def test_an_option_given_twice_takes_its_last_value_on_every_tool(binary, tool):
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and option in lines[0] and "At Most" not in lines[0], result.stderr
+
+
+# The benchmarks `make bench` runs (build/bench/): the same convention. bench -> a usage error
+# and the option its one line must name.
+BENCHES = {
+    "bench_sim_cpu": ([], "--out"),
+    "bench_sim_vulkan": ([], "--out"),
+    "bench_live_backends": ([], "--out"),
+    "bench_render": (["--frames", "0"], "--frames"),
+    "firmware_bridge_loopback_ping_pong": (["--out", "x.json", "--iterations", "many"], "--iterations"),
+}
+
+
+def test_every_benchmark_is_checked(build_dir):
+    built = {p.name for p in (build_dir / "bench").iterdir() if p.is_file()}
+    assert built == set(BENCHES)
+
+
+@pytest.mark.parametrize("bench", sorted(BENCHES))
+def test_benchmarks_follow_the_convention(build_dir, bench):
+    exe = str(build_dir / "bench" / bench)
+    help_ = subprocess.run([exe, "--help"], capture_output=True, text=True, timeout=30)
+    assert help_.returncode == 0 and help_.stderr == "" and f"Usage: {bench}" in help_.stdout
+    version = subprocess.run([exe, "--version"], capture_output=True, text=True, timeout=30)
+    assert re.fullmatch(rf"{bench} \d+\.\d+\.\d+\+git\.\S+\n", version.stdout), version.stdout
+    args, option = BENCHES[bench]
+    error = subprocess.run([exe, *args], capture_output=True, text=True, timeout=30)
+    lines = error.stderr.strip().splitlines()
+    assert error.returncode == 2
+    assert len(lines) == 1 and lines[0].startswith(f"{bench}: ") and option in lines[0], error.stderr

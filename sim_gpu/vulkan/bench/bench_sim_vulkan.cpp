@@ -10,13 +10,13 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <unistd.h>
 #include <vector>
 
+#include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
@@ -30,7 +30,7 @@ using namespace hapfluid::sim::bench;
 
 namespace {
 
-std::vector<std::string> records;
+std::vector<config::Json> records;
 
 double cpu_ms_per_step(const SimulationModel& model, int steps) {
   CpuSolver solver(model, 2);
@@ -42,7 +42,7 @@ double cpu_ms_per_step(const SimulationModel& model, int steps) {
 }
 
 void measure(const std::string& sweep, const config::Scene& scene, int steps, bool validation, bool with_cpu,
-             const std::string& extra_params) {
+             const config::Json& extra_params = config::Json::object()) {
   const SimulationModel model = build_model(scene);
   vulkan::VulkanSolverOptions options;
   options.context.validation = validation;
@@ -61,23 +61,21 @@ void measure(const std::string& sweep, const config::Scene& scene, int steps, bo
   const double ms = 1000 * wall / steps;
   auto pass = [&](double a, double b) { return 1000 * (a - b) / steps; };
   const double cpu_ms = with_cpu ? cpu_ms_per_step(model, steps) : 0;
-  char buf[1400];
-  std::snprintf(buf, sizeof buf,
-                "{\"bench\": \"bench_sim_vulkan\", \"params\": {\"backend\": \"vulkan\", \"sweep\": \"%s\", \"particles\": %zu, "
-                "\"fluid_particles\": %zu, \"body_particles\": %zu, \"boundary_particles\": %zu, \"device\": \"%s\"%s}, "
-                "\"metrics\": {\"steps_per_s\": %.3f, \"ms_per_step\": %.3f, \"particle_steps_per_s\": %.0f, "
-                "\"sort_ms\": %.3f, \"density_ms\": %.3f, \"forces_ms\": %.3f, \"bodies_ms\": %.3f, "
-                "\"integration_ms\": %.3f, \"reductions_ms\": %.3f%s}}",
-                sweep.c_str(), fluid + body, fluid, body, m.wall_particle_count, solver.device().name.c_str(),
-                extra_params.c_str(), steps / wall, ms, steps * static_cast<double>(fluid + body) / wall,
-                pass(after.sort_s, before.sort_s), pass(after.density_s, before.density_s),
-                pass(after.forces_s, before.forces_s), pass(after.bodies_s, before.bodies_s),
-                pass(after.integration_s, before.integration_s), pass(after.reductions_s, before.reductions_s),
-                with_cpu ? (", \"cpu_2_threads_ms_per_step\": " + std::to_string(cpu_ms) +
-                            ", \"vulkan_over_cpu\": " + std::to_string(ms / cpu_ms))
-                               .c_str()
-                         : "");
-  records.push_back(buf);
+  config::Json params = {{"backend", "vulkan"}, {"sweep", sweep}, {"particles", fluid + body}, {"fluid_particles", fluid},
+                         {"body_particles", body}, {"boundary_particles", m.wall_particle_count},
+                         {"device", solver.device().name}};
+  params.update(extra_params);
+  config::Json metrics = {{"steps_per_s", steps / wall}, {"ms_per_step", ms},
+                          {"particle_steps_per_s", steps * static_cast<double>(fluid + body) / wall},
+                          {"sort_ms", pass(after.sort_s, before.sort_s)}, {"density_ms", pass(after.density_s, before.density_s)},
+                          {"forces_ms", pass(after.forces_s, before.forces_s)}, {"bodies_ms", pass(after.bodies_s, before.bodies_s)},
+                          {"integration_ms", pass(after.integration_s, before.integration_s)},
+                          {"reductions_ms", pass(after.reductions_s, before.reductions_s)}};
+  if (with_cpu) {
+    metrics["cpu_2_threads_ms_per_step"] = cpu_ms;
+    metrics["vulkan_over_cpu"] = ms / cpu_ms;
+  }
+  records.push_back(config::bench_record("bench_sim_vulkan", std::move(params), std::move(metrics)));
   std::fprintf(stderr,
                "bench_sim_vulkan: %-5s %6zu particles (%zu body) on %s: %7.2f ms/step, %6.1f steps/s "
                "[sort %.2f, density %.2f, forces %.2f, bodies %.2f, integrate %.2f, reductions %.2f ms]",
@@ -92,34 +90,28 @@ void measure(const std::string& sweep, const config::Scene& scene, int steps, bo
 }  // namespace
 
 int main(int argc, char** argv) {
+  CLI::App app{"Steps per second of the Vulkan backend on the scenes of bench_sim_cpu; JSON records to --out.",
+               "bench_sim_vulkan"};
+  config::apply_convention(app);
   std::string out;
   bool quick = false, validation = false;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--out" && i + 1 < argc) out = argv[++i];
-    else if (a == "--quick") quick = true;
-    else if (a == "--validation") validation = true;
-    else {
-      std::cerr << "usage: bench_sim_vulkan --out FILE.json [--quick] [--validation]\n";
-      return 2;
-    }
-  }
-  if (out.empty()) {
-    std::cerr << "bench_sim_vulkan: --out FILE.json is required\n";
-    return 2;
-  }
+  app.add_option("--out", out, "JSON records (a list) to this file")->required();
+  app.add_flag("--quick", quick, "the smallest sweep, for tests");
+  app.add_flag("--validation", validation, "run with the Khronos validation layer");
+  if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
   const auto dir = std::filesystem::temp_directory_path() / ("bench_sim_vulkan_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   const int steps = quick ? 5 : 30;
   try {
     const std::vector<int> sizes = quick ? std::vector<int>{8000, 32000} : std::vector<int>{8000, 16000, 32000, 64000};
-    for (int n : sizes) measure("pool", pool_scene(dir, n, n, {}), steps, validation, true, "");
+    for (int n : sizes) measure("pool", pool_scene(dir, n, n, {}), steps, validation, true);
     const int total = 25000;
     const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};
     for (int n : sphere_sizes) {
       const double r = 0.15;
       const std::vector<Body> bodies = {{0.5, 0.5, 0.2, r, sphere_spacing(n, r)}};
-      measure("fig6b", matched_scene(dir, total, bodies), steps, validation, false, ", \"bodies\": 1, \"body_particles_requested\": " + std::to_string(n));
+      measure("fig6b", matched_scene(dir, total, bodies), steps, validation, false,
+              {{"bodies", 1}, {"body_particles_requested", n}});
     }
     const std::vector<int> counts = quick ? std::vector<int>{4} : std::vector<int>{1, 2, 4, 8, 16};
     for (int k : counts) {
@@ -128,8 +120,7 @@ int main(int argc, char** argv) {
       const double spacing = sphere_spacing(8000 / k, r);
       std::vector<Body> bodies;
       for (int i = 0; i < k; ++i) bodies.push_back({(i % per_row + 0.5) * cell, (i / per_row + 0.5) * cell, 0.2, r, spacing});
-      measure("fig6c", matched_scene(dir, total, bodies), steps, validation, false,
-              ", \"bodies\": " + std::to_string(k));
+      measure("fig6c", matched_scene(dir, total, bodies), steps, validation, false, {{"bodies", k}});
     }
   } catch (const std::exception& e) {
     std::cerr << "bench_sim_vulkan: " << e.what() << "\n";
@@ -137,11 +128,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::filesystem::remove_all(dir);
-  std::ofstream f(out + ".part");
-  f << "[\n";
-  for (std::size_t i = 0; i < records.size(); ++i) f << "  " << records[i] << (i + 1 < records.size() ? ",\n" : "\n");
-  f << "]\n";
-  f.close();
-  std::filesystem::rename(out + ".part", out);
+  try {
+    config::write_json_atomically(out, records);
+  } catch (const std::exception& e) {
+    std::cerr << "bench_sim_vulkan: " << e.what() << "\n";
+    return 1;
+  }
   return 0;
 }
