@@ -21,6 +21,7 @@
 #include "hand.hpp"
 #include "hidg_transport.hpp"
 #include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/hid_descriptors.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -462,25 +463,23 @@ int run(const Options& o) {
 
   const double reaction_ms = firmware.watchdog_trip_s() >= 0
                                  ? (firmware.watchdog_trip_s() - firmware.watchdog_trip_last_command_s()) * 1e3 : -1;
-  char summary[1024];
-  std::snprintf(summary, sizeof summary,
-                "{\"ticks\": %llu, \"ticks_lost\": %llu, \"states_sent\": %llu, \"states_dropped\": %llu, "
-                "\"states_corrupted\": %llu, \"commands_applied\": %llu, \"command_sequence_gaps\": %u, "
-                "\"frames_bad\": %llu, \"faults\": %u, \"watchdog_trip_s\": %.6f, \"last_command_s\": %.6f, "
-                "\"watchdog_reaction_ms\": %.3f}\n",
-                static_cast<unsigned long long>(ticks), static_cast<unsigned long long>(late_ticks),
-                static_cast<unsigned long long>(states_sent), static_cast<unsigned long long>(states_dropped),
-                static_cast<unsigned long long>(states_corrupted),
-                static_cast<unsigned long long>(firmware.commands_applied()), firmware.command_sequence_gaps(),
-                static_cast<unsigned long long>(link->frames_bad()), firmware.faults(), firmware.watchdog_trip_s(),
-                firmware.last_command_s(), reaction_ms);
-  std::fputs(summary, stdout);
-  if (!o.summary_path.empty()) {
-    FILE* f = std::fopen(o.summary_path.c_str(), "w");
-    if (!f) throw std::runtime_error("cannot write the summary " + o.summary_path);
-    std::fputs(summary, f);
-    std::fclose(f);
-  }
+  namespace config = hapfluid::config;
+  config::Json summary;
+  summary["build_id"] = config::build_id();
+  summary["ticks"] = ticks;
+  summary["ticks_lost"] = late_ticks;
+  summary["states_sent"] = states_sent;
+  summary["states_dropped"] = states_dropped;
+  summary["states_corrupted"] = states_corrupted;
+  summary["commands_applied"] = firmware.commands_applied();
+  summary["command_sequence_gaps"] = firmware.command_sequence_gaps();
+  summary["frames_bad"] = link->frames_bad();
+  summary["faults"] = firmware.faults();
+  summary["watchdog_trip_s"] = firmware.watchdog_trip_s();
+  summary["last_command_s"] = firmware.last_command_s();
+  summary["watchdog_reaction_ms"] = reaction_ms;
+  std::fputs((config::json_line(summary) + "\n").c_str(), stdout);
+  if (!o.summary_path.empty()) config::write_json_atomically(o.summary_path, summary);
   return 0;
 }
 

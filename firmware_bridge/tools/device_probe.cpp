@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/haptic_arm.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -165,41 +166,44 @@ int run(const Options& o) {
   }
   device::DeviceHealth h = dev->health();
   const double span_s = (last_state_ns - first_state_ns) * 1e-9;
-  char text[2048];
-  std::snprintf(
-      text, sizeof text,
-      "{\"device\": \"%s\", \"duration_s\": %.3f, \"states\": %llu, \"state_rate_hz\": %.1f, "
-      "\"longest_state_gap_ms\": %.3f, \"last_state_age_ms\": %.3f, "
-      "\"rtt_samples\": %zu, \"rtt_p50_us\": %.1f, \"rtt_p99_us\": %.1f, \"rtt_max_us\": %.1f, "
-      "\"frames_ok\": %llu, \"frames_bad\": %llu, \"sequence_gaps\": %llu, \"commands_sent\": %llu, "
-      "\"send_errors\": %llu, \"transport_errors\": %u, \"transport_errors_now\": %u, \"connected\": %s, "
-      "\"faults_seen\": %u, \"status_seen\": %u, \"final_faults\": %u, \"final_status\": %u, "
-      "\"mean_position_late_half_m\": [%.6f, %.6f, %.6f], \"max_abs_position_m\": %.6f, "
-      "\"watchdog_seen_after_silence_ms\": %.3f, \"estop_seen_after_request_ms\": %.3f, "
-      "\"info\": %s}\n",
-      dev->name(), o.duration_s, static_cast<unsigned long long>(states), span_s > 0 ? progressed / span_s : 0.0, longest_gap_ms,
-      last_state_ns ? (device::monotonic_ns() - last_state_ns) * 1e-6 : -1.0,
-      rtt_us.size(), percentile(rtt_us, 50), percentile(rtt_us, 99), percentile(rtt_us, 100),
-      static_cast<unsigned long long>(h.frames_ok), static_cast<unsigned long long>(h.frames_bad),
-      static_cast<unsigned long long>(h.sequence_gaps), static_cast<unsigned long long>(h.commands_sent),
-      static_cast<unsigned long long>(h.send_errors), max_transport_errors, h.transport_errors,
-      h.connected ? "true" : "false", faults_seen, status_seen, last_state.fault, last_state.status,
-      late_half ? sum_pos[0] / late_half : 0, late_half ? sum_pos[1] / late_half : 0,
-      late_half ? sum_pos[2] / late_half : 0, max_abs_position_m,
-      watchdog_seen_ns && silence_start_ns ? (static_cast<double>(watchdog_seen_ns) - silence_start_ns) * 1e-6 : -1.0,
-      estop_seen_ns && o.estop_at_s >= 0 ? (estop_seen_ns - t0) * 1e-6 - o.estop_at_s * 1e3 : -1.0,
-      arm && arm->has_info()
-          ? ("{\"vendor_id\": " + std::to_string(arm->info().vendor_id) + ", \"product_id\": " +
-             std::to_string(arm->info().product_id) + ", \"watchdog_ms\": " + std::to_string(arm->info().watchdog_ms) +
-             ", \"max_force_n\": " + std::to_string(arm->info().max_force_n) + "}").c_str()
-          : "null");
-  std::fputs(text, stdout);
-  if (!o.out.empty()) {
-    FILE* f = std::fopen(o.out.c_str(), "w");
-    if (!f) throw std::runtime_error("cannot write " + o.out);
-    std::fputs(text, f);
-    std::fclose(f);
-  }
+  namespace config = hapfluid::config;
+  config::Json report;
+  report["build_id"] = config::build_id();
+  report["device"] = dev->name();
+  report["duration_s"] = o.duration_s;
+  report["states"] = states;
+  report["state_rate_hz"] = span_s > 0 ? progressed / span_s : 0.0;
+  report["longest_state_gap_ms"] = longest_gap_ms;
+  report["last_state_age_ms"] = last_state_ns ? (device::monotonic_ns() - last_state_ns) * 1e-6 : -1.0;
+  report["rtt_samples"] = rtt_us.size();
+  report["rtt_p50_us"] = percentile(rtt_us, 50);
+  report["rtt_p99_us"] = percentile(rtt_us, 99);
+  report["rtt_max_us"] = percentile(rtt_us, 100);
+  report["frames_ok"] = h.frames_ok;
+  report["frames_bad"] = h.frames_bad;
+  report["sequence_gaps"] = h.sequence_gaps;
+  report["commands_sent"] = h.commands_sent;
+  report["send_errors"] = h.send_errors;
+  report["transport_errors"] = max_transport_errors;
+  report["transport_errors_now"] = h.transport_errors;
+  report["connected"] = h.connected;
+  report["faults_seen"] = faults_seen;
+  report["status_seen"] = status_seen;
+  report["final_faults"] = last_state.fault;
+  report["final_status"] = last_state.status;
+  report["mean_position_late_half_m"] = {late_half ? sum_pos[0] / late_half : 0, late_half ? sum_pos[1] / late_half : 0,
+                                         late_half ? sum_pos[2] / late_half : 0};
+  report["max_abs_position_m"] = max_abs_position_m;
+  report["watchdog_seen_after_silence_ms"] =
+      watchdog_seen_ns && silence_start_ns ? (static_cast<double>(watchdog_seen_ns) - silence_start_ns) * 1e-6 : -1.0;
+  report["estop_seen_after_request_ms"] =
+      estop_seen_ns && o.estop_at_s >= 0 ? (estop_seen_ns - t0) * 1e-6 - o.estop_at_s * 1e3 : -1.0;
+  report["info"] = nullptr;
+  if (arm && arm->has_info())
+    report["info"] = {{"vendor_id", arm->info().vendor_id}, {"product_id", arm->info().product_id},
+                      {"watchdog_ms", arm->info().watchdog_ms}, {"max_force_n", arm->info().max_force_n}};
+  std::fputs((config::json_line(report) + "\n").c_str(), stdout);
+  if (!o.out.empty()) config::write_json_atomically(o.out, report);
   return 0;
 }
 

@@ -13,6 +13,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
+#include "hapfluid/config/json_output.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/render/apps.hpp"
 #include "hapfluid/render/replay_source.hpp"
@@ -109,13 +110,12 @@ config::FluidLook look_named(const std::string& name) {
 std::filesystem::path scene_of_run(const std::filesystem::path& run) {
   if (std::filesystem::exists(run / "scene.toml")) return run / "scene.toml";
   std::ifstream stats(run / "stats.json");
-  const std::string text((std::istreambuf_iterator<char>(stats)), std::istreambuf_iterator<char>());
-  const std::string key = "\"scene\": \"";
-  const size_t at = text.find(key);
-  if (at == std::string::npos) return {};
-  const size_t end = text.find('"', at + key.size());
-  if (end == std::string::npos) return {};
-  const std::filesystem::path scene = text.substr(at + key.size(), end - at - key.size());
+  if (!stats) return {};
+  // A stats file that does not parse or names no scene is the same as none: the caller says
+  // where it looked.
+  const hapfluid::config::Json j = hapfluid::config::Json::parse(stats, nullptr, false);
+  if (j.is_discarded() || !j.is_object() || !j.contains("scene") || !j["scene"].is_string()) return {};
+  const std::filesystem::path scene = j["scene"].get<std::string>();
   if (scene.is_absolute() || std::filesystem::exists(scene)) return scene;
   return run / scene;
 }

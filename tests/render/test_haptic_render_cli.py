@@ -1,6 +1,7 @@
 """haptic-render as a user runs it: headless PNG output, buffer dumps, replay of a recorded run,
 and clear errors for bad input. Every run has the Vulkan validation layer on (exit code 3 if it
 reports anything)."""
+import json
 import os
 import pathlib
 import shutil
@@ -33,7 +34,7 @@ def write_recorded_run(run_dir: pathlib.Path, frames: int, scene_in_stats: bool 
         '[time]\nframe_rate_hz = 30.0\n'
         '[[bodies]]\nname = "spoon"\nmesh = "cube.obj"\nposition_m = [0.0, 0.0, 0.25]\ndensity_kg_m3 = 500.0\n')
     if scene_in_stats:
-        (run_dir / "stats.json").write_text('{\n  "scene": "%s",\n  "frames_exported": %d\n}\n' % (scene, frames))
+        (run_dir / "stats.json").write_text(json.dumps({"scene": str(scene), "frames_exported": frames}, indent=2))
     fluid = [(x * 0.02, y * 0.02, 0.01 + z * 0.02) for x in range(-4, 5) for y in range(-4, 5) for z in range(3)]
     wall = [(x * 0.02, y * 0.02, -0.01) for x in range(-6, 7) for y in range(-6, 7)]
     for f in range(frames):
@@ -80,8 +81,10 @@ def test_replay_renders_one_png_per_recorded_frame(binary, tmp_path):
         assert "ffmpeg not found: skipping the MP4" in r.stderr
 
 
-def test_replay_finds_the_scene_through_stats_json(binary, tmp_path):
-    run_dir = tmp_path / "run"
+@pytest.mark.parametrize("folder", ["run", 'run "quoted" \\ dir'])
+def test_replay_finds_the_scene_through_stats_json(binary, tmp_path, folder):
+    # JSON escapes a quote or a backslash in the scene's path; the path read back is the real one.
+    run_dir = tmp_path / folder
     write_recorded_run(run_dir, frames=2, scene_in_stats=True)
     r = run(binary, "--headless", "--replay", run_dir, "--out", tmp_path / "frames", *SMALL)
     assert r.returncode == 0, r.stderr
