@@ -38,7 +38,7 @@ test: build
 	@bash scripts/run-tests.sh $(BUILD)
 
 run: build
-	@$(PY) scripts/hapfluid.py run --build $(BUILD) --scene $(SCENE) $(if $(DURATION),--duration $(DURATION))
+	@$(PY) -m hapfluid run --build $(BUILD) --scene $(SCENE) $(if $(DURATION),--duration $(DURATION))
 
 bench: build
 	@bash scripts/install-deps.sh bench

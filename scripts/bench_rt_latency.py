@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Benchmark of haptic-rt's 1 kHz loop: a run with two (simulated) devices and a 100 Hz stand-in
 sim, side by side with cyclictest at the same priority and period over the same window
-(scripts/latency_report.py --with-cyclictest). Target: loop compute p99.9 <= 20 µs.
+(python -m hapfluid.latency_report --with-cyclictest). Target: loop compute p99.9 <= 20 µs.
 
     bench_rt_latency.py --build build --out out/bench/rt_latency.json [--duration 30 | --short]
 """
@@ -10,8 +10,7 @@ import json
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-import latency_report  # noqa: E402
+from hapfluid import latency_report
 
 SOURCE_DIR = pathlib.Path(__file__).resolve().parent.parent
 RIG = SOURCE_DIR / "tests" / "rt_core" / "rigs" / "bench_two_arms.toml"

@@ -38,7 +38,7 @@ import time
 import numpy as np
 
 import splishsplash
-import vtk_frames
+from hapfluid import vtk_frames
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 CASES = {

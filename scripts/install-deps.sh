@@ -26,16 +26,16 @@ debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
 # clang-14 (via clang) compiles the fuzzing build, libclang-rt-14-dev holds libFuzzer and the
 # sanitizer runtimes, llvm-14 the llvm-symbolizer that turns sanitizer reports into file:line.
 debian_fuzz=(clang libclang-rt-14-dev llvm-14)
-python_packages=(pytest numpy matplotlib python-can cantools hypothesis tomli-w)
-# Only bench_splishsplash.py uses it; pinned so that its scene format and log stay what we parse.
-python_bench=(pysplishsplash==2.19.0)
+# Python: the hapfluid package (scripts/pyproject.toml) with its extras, every version pinned by
+# scripts/constraints.txt.
+python_extras=test
 
 want=("${debian_core[@]}")
 [ "$group" = hil ] && want+=("${debian_hil[@]}")
 [ "$group" = fuzz ] && want+=("${debian_fuzz[@]}")
 case "$group" in
   core|hil|fuzz) ;;
-  bench) python_packages+=("${python_bench[@]}") ;;
+  bench) python_extras=test,bench ;;
   *) echo "install-deps: unknown group '$group' (core, hil, bench or fuzz)" >&2; exit 2 ;;
 esac
 
@@ -52,10 +52,13 @@ if [ ${#missing[@]} -gt 0 ]; then
   fi
   echo "install-deps: installing Debian packages: ${missing[*]}"
   export DEBIAN_FRONTEND=noninteractive
+  # Another apt (unattended-upgrades, a second make in another checkout) may hold the dpkg lock:
+  # wait for it rather than fail the build.
+  apt=(apt-get -o DPkg::Lock::Timeout=600)
   # A stale or empty package list makes apt say "unable to locate": refresh once, then install.
-  if ! apt-get install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1; then
-    apt-get update -q >/tmp/hapfluid-apt-update.log 2>&1 || { cat /tmp/hapfluid-apt-update.log >&2; exit 1; }
-    apt-get install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1 \
+  if ! "${apt[@]}" install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1; then
+    "${apt[@]}" update -q >/tmp/hapfluid-apt-update.log 2>&1 || { cat /tmp/hapfluid-apt-update.log >&2; exit 1; }
+    "${apt[@]}" install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1 \
       || { tail -n 30 /tmp/hapfluid-apt.log >&2; echo "install-deps: apt-get install failed (log: /tmp/hapfluid-apt.log)" >&2; exit 1; }
   fi
 fi
@@ -65,18 +68,35 @@ if [ ! -x "$venv/bin/python" ]; then
   echo "install-deps: creating Python venv in $venv"
   python3 -m venv "$venv" || /usr/bin/python3 -m venv "$venv"
 fi
-pymissing=()
-for p in "${python_packages[@]}"; do
-  name="${p%%==*}"
-  if [ "$name" = "$p" ]; then
-    "$venv/bin/python" -m pip show -q "$p" >/dev/null 2>&1 || pymissing+=("$p")
-  else
-    # Pinned: the installed version must be the pin's.
-    have="$("$venv/bin/python" -m pip show "$name" 2>/dev/null | sed -n 's/^Version: //p' || true)"
-    [ "$have" = "${p#*==}" ] || pymissing+=("$p")
-  fi
-done
-if [ ${#pymissing[@]} -gt 0 ]; then
-  echo "install-deps: installing Python packages into .venv: ${pymissing[*]}"
-  "$venv/bin/python" -m pip install -q --disable-pip-version-check "${pymissing[@]}"
+# Installed when the venv lacks what this checkout's pyproject and constraints ask for: a stamp of
+# both (the package's entry points live in its install metadata), then each requirement at its pin.
+project="$here/scripts"
+stamp="$venv/hapfluid-install.stamp"
+want_stamp="$(cat "$project/pyproject.toml" "$project/constraints.txt" | sha256sum | cut -c1-16) $project"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want_stamp" ] \
+    || ! "$venv/bin/python" - "$project" "$python_extras" <<'PY'
+import pathlib, re, sys, tomllib
+from importlib import metadata
+
+project, extras = pathlib.Path(sys.argv[1]), sys.argv[2].split(",")
+norm = lambda name: re.sub(r"[-_.]+", "-", name).lower()
+pins = {norm(line.split("==")[0]): line.split("==")[1].strip()
+        for line in (project / "constraints.txt").read_text().split("\n") if line.strip() and not line.startswith("#")}
+spec = tomllib.loads((project / "pyproject.toml").read_text())["project"]
+wanted = ["hapfluid", *spec["dependencies"], *(r for e in extras for r in spec["optional-dependencies"][e])]
+for requirement in wanted:
+    name = norm(re.match(r"[A-Za-z0-9._-]+", requirement).group())
+    try:
+        version = metadata.version(name)
+    except metadata.PackageNotFoundError:
+        sys.exit(1)
+    if name in pins and version != pins[name]:
+        sys.exit(1)
+PY
+then
+  echo "install-deps: installing the hapfluid Python package [$python_extras] into .venv (pins: scripts/constraints.txt)"
+  # The constraints reach pip's isolated build environment too (setuptools, wheel) through PIP_CONSTRAINT.
+  PIP_CONSTRAINT="$project/constraints.txt" "$venv/bin/python" -m pip install -q --disable-pip-version-check \
+    -e "$project[$python_extras]"
+  echo "$want_stamp" > "$stamp"
 fi

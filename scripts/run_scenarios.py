@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The paper's scenarios end to end on the live stack (scripts/hapfluid.py: fake devices playing
+"""The paper's scenarios end to end on the live stack (`python -m hapfluid run`: fake devices playing
 the scripted hands, haptic-rt, haptic-sim --live, haptic-trace, cyclictest beside the loop), each
 with its figure and its qualitative result checked (scenario_checks.py):
 
@@ -13,7 +13,7 @@ with its figure and its qualitative result checked (scenario_checks.py):
 
     run_scenarios.py [--only stirring,glass,...] [--build build] [--out out/scenarios] [--render] [--duration S]
 
-Each scene runs live for its whole script (hapfluid.py's default duration: the 3 s lead-in, so
+Each scene runs live for its whole script (the launcher's default duration: the 3 s lead-in, so
 the stack is up and the fluid settled before the script starts, plus the scene's duration_s).
 The figures are drawn against the hands' clock (scene time, the script's motions shaded).
 
@@ -27,7 +27,7 @@ figure and its check are the batch run's, the live run's figure is <figure>_live
 table says which one was judged. Stirring and the probe are always judged live: what the hand
 felt against its own velocity, one clock, a claim any real-time factor keeps.
 
-Writes out/scenarios/<scenario>/<scene>/ (hapfluid.py run folders, batch/ beside sim/), fig8_stirring.png,
+Writes out/scenarios/<scenario>/<scene>/ (launcher run folders, batch/ beside sim/), fig8_stirring.png,
 alg1_probe.png, fig9_pouring.png, fig10_spinning_glass.png, fig11_bucket.png, crepe.png and scenarios.json (per
 scene: sim steps/s, real-time factor, max force on the hands, loop and cyclictest wake latency;
 per scenario: the check's verdict and numbers). Exits 1 when a run fails or a result does not hold.
@@ -53,14 +53,14 @@ SCENARIOS = {
     "crepe": (["crepe"], "crepe.png", "§6.5: crepe, batter poured from the bowl into the pan and spread"),
 }
 LIVE_RTF_FOR_PHYSICS = 0.9
-LEAD_IN_S = 3.0  # as hapfluid.py's default; the plots' --hand-offset
+LEAD_IN_S = 3.0  # as the launcher's default; the plots' --hand-offset
 LIVE_ONLY = {"stirring", "probe"}
 SUMMARY_KEYS = ("ok", "sim_backend", "sim_steps_per_s", "real_time_factor", "sim_kept_up", "fluid_particles",
                 "max_force_on_hand_n", "wake_latency_us", "cyclictest_us", "script_offset_s")
 
 
 def run_scene(scene, run_dir, args) -> dict:
-    cmd = [PY, str(ROOT / "scripts" / "hapfluid.py"), "run", "--scene", scene, "--build", args.build, "--out", str(run_dir),
+    cmd = [PY, "-m", "hapfluid", "run", "--scene", scene, "--build", args.build, "--out", str(run_dir),
            "--lead-in", str(LEAD_IN_S)]
     cmd += [] if args.render else ["--no-render"]
     cmd += ["--duration", str(args.duration)] if args.duration else []
@@ -76,7 +76,7 @@ def run_batch(scene, run_dir, args) -> bool:
     """The scene in batch mode beside its live run (scenario_checks.BATCH_DIR): the script in simulated time."""
     print(f"run_scenarios: {scene}: batch (the script at its own speed in simulated time)", file=sys.stderr, flush=True)
     build = pathlib.Path(args.build)
-    build = build if build.is_absolute() else ROOT / build  # as hapfluid.py resolves it
+    build = build if build.is_absolute() else ROOT / build  # as the launcher resolves it
     cmd = [str(build / "bin" / "haptic-sim"), "--scene", str(ROOT / "config" / "scenes" / f"{scene}.toml"),
            "--out", str(run_dir / scenario_checks.BATCH_DIR), "--backend", "cpu", "--export-every", "0"]
     return subprocess.run(cmd).returncode == 0
@@ -93,7 +93,7 @@ def plot(scenes, folders, table, png, title, batch) -> bool:
         offsets = ",".join(str(table[s].get("script_offset_s") or 0) for s in scenes)
         title += " (live" + (f", fluid at {rtf:.2g}x real time)" if rtf < 0.95 else ")")
     hands = [] if batch or len(scenes) > 1 else [f"--hand={p}" for p in folders[0].glob("device_*.csv")]
-    cmd = [PY, str(ROOT / "scripts" / "plot_wrenches.py"), *map(str, csvs), "--out", str(png), "--title", title,
+    cmd = [PY, "-m", "hapfluid.plot_wrenches", *map(str, csvs), "--out", str(png), "--title", title,
            "--scene", scenes[0], "--time", clock, f"--time-offset={offsets}",  # = : an offset may start with -
            *hands, f"--hand-offset={LEAD_IN_S}"]
     if len(scenes) > 1:

@@ -1,6 +1,6 @@
 """The paper's qualitative results (§6.4-6.5, figs. 8-11), checked on a live run's histories.
 
-Every check reads one scripts/hapfluid.py run folder (or four, for the glass) and returns a
+Every check reads one launcher run folder (`python -m hapfluid run`) (or four, for the glass) and returns a
 Verdict: whether the result holds, and the numbers it was judged on. Times are scene times, the
 clock of the scene file's script (0 = the script's start): the hands play it on the wall clock,
 so a sim slower than real time (it drops its backlog and says so) still sees every phase at the
@@ -47,7 +47,7 @@ class Verdict:
 
 
 class Run:
-    """One hapfluid.py run folder: its scene, summary, sim couplings (scene time) and device logs.
+    """One launcher run folder: its scene, summary, sim couplings (scene time) and device logs.
     batch: judge the batch run beside it instead (BATCH_DIR: haptic-sim without the live stack,
     the scripted hands evaluated at simulated time, so scene time is simulated time)."""
 

@@ -8,8 +8,7 @@ import math
 import pathlib
 import sys
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[2] / "scripts"))
-from hapfluid_proto import codec  # noqa: E402
+from hapfluid.proto import codec
 
 HERE = pathlib.Path(__file__).resolve().parent
 S = math.sqrt(0.5)

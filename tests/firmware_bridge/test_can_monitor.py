@@ -1,4 +1,4 @@
-"""can_monitor.py decodes live loopback traffic through the python-can adapter and recorded
+"""hapfluid.can_monitor decodes live loopback traffic through the python-can adapter and recorded
 logs in the formats CAN tools write (candump -l, Vector ASC, BLF), flagging damaged frames."""
 import json
 import subprocess
@@ -7,15 +7,13 @@ import sys
 import can
 import pytest
 
-from proto_path import SOURCE_DIR, VECTORS
+from proto_path import VECTORS
 from fake_device import FakeDevice
-from hapfluid_proto import codec, pycan_loopback
-
-MONITOR = SOURCE_DIR / "scripts" / "can_monitor.py"
+from hapfluid.proto import codec, pycan_loopback
 
 
 def monitor(*args):
-    result = subprocess.run([sys.executable, str(MONITOR), *map(str, args)], capture_output=True, text=True,
+    result = subprocess.run([sys.executable, "-m", "hapfluid.can_monitor", *map(str, args)], capture_output=True, text=True,
                             timeout=60)
     assert result.returncode == 0, result.stderr
     return [json.loads(line) for line in result.stdout.splitlines() if line.strip()]
@@ -44,9 +42,8 @@ def test_live_loopback_bus_shows_both_directions_at_1khz(binary, tmp_path):
     assert "bad_frames" not in stats
 
 
-def test_adapter_registers_as_a_python_can_interface(binary, tmp_path):
+def test_python_can_finds_the_adapter_through_the_packages_entry_point(binary, tmp_path):
     sock = tmp_path / "bus.sock"
-    pycan_loopback.register()
     with FakeDevice(binary("haptic-fake-device"), sock, "--framing", "canfd", "--node", 2, duration=30):
         with can.Bus(interface="hapfluid_loopback", channel=str(sock)) as bus:
             # ask the device who it is, as a python-can script on a rig would

@@ -10,7 +10,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from proto_path import SOURCE_DIR, VECTORS
-from hapfluid_proto import codec
+from hapfluid.proto import codec
 
 V = json.loads(VECTORS.read_text())
 

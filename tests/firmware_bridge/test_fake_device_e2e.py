@@ -320,7 +320,7 @@ def test_unknown_scene_device_is_named(programs, tmp_path):
 
 
 def test_the_log_stamps_every_state_sent_and_command_taken_on_the_machines_clock(programs, tmp_path):
-    # The log is one end of the motion-to-force chain (scripts/motion_to_force_latency.py): each
+    # The log is one end of the motion-to-force chain (hapfluid.motion_to_force_latency): each
     # tick on CLOCK_MONOTONIC (the clock of the loop's trace and the sim's publish_ns), the STATE
     # it sampled and sent, and when it took commands off the link (after the drain, so never
     # before the host sent them).

@@ -7,7 +7,7 @@ import cantools
 import pytest
 
 from proto_path import DBC, SOURCE_DIR
-from hapfluid_proto import codec
+from hapfluid.proto import codec
 
 DOC = (SOURCE_DIR / "firmware_bridge" / "protocol.md").read_text()
 DB = cantools.database.load_file(str(DBC))
@@ -59,7 +59,7 @@ def test_crc_check_values_quoted_in_the_document():
 
 
 def test_bus_load_table_is_what_busload_computes():
-    from hapfluid_proto import busload
+    from hapfluid.proto import busload
     rows = {(r["bus"], r["case"]): r for r in busload.table()}
     for bus, label in (("classic CAN 1 Mbit/s", "classic CAN, 1 Mbit/s"), ("CAN FD 1/2 Mbit/s", "CAN FD, 1 / 2 Mbit/s"),
                        ("CAN FD 1/5 Mbit/s", "CAN FD, 1 / 5 Mbit/s")):

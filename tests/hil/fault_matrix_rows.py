@@ -5,7 +5,7 @@ the safe state the hand must reach, and the rig keys that bound the time to it.
 The sim is haptic-sim-standin (a steady 2 N, no physics: the loop cannot tell it from haptic-sim,
 and its load is known exactly); test_fault_injection.py kills and stalls the real haptic-sim. The
 device is haptic-fake-device, whose injected faults begin at SIGUSR1 (--inject-on-signal); a
-second node on its loopback bus is a python-can peer (hapfluid_proto)."""
+second node on its loopback bus is a python-can peer (hapfluid.proto)."""
 import csv
 import io
 import json
@@ -22,9 +22,9 @@ from hil_stack import (FAULT_COMMUNICATION_CONSTRAINTS, FAULT_DEVICE_NOT_LISTENI
                        FAULT_FOREIGN_COMMAND, FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, FLAG_FORCE_NORM_LIMITED, FLAG_HARD_ZERO,
                        FLAG_NONFINITE_INPUT, FLAG_SIM_STALE_RAMP, FLAG_TORQUE_NORM_LIMITED, LINK_FAULTS, Stack,
                        TraceFollower, engaged, force, read_csv)
-from hapfluid import load_toml
-from hapfluid_proto import can_encode
-from hapfluid_proto.pycan_loopback import LoopbackBus
+from hapfluid.launcher import load_toml
+from hapfluid.proto import can_encode
+from hapfluid.proto.pycan_loopback import LoopbackBus
 
 LOAD = "0,0,2"  # the stand-in's wrench (N): steady, so the hand engages through engage_hold_ms
 LOAD_N = 2.0

@@ -28,8 +28,7 @@ import time
 import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "scripts"))
-from hapfluid import cpu_placement, device_scene, load_toml, private_rig_text  # noqa: E402  (shared with the launcher)
+from hapfluid.launcher import cpu_placement, device_scene, load_toml, private_rig_text  # shared with the launcher
 
 LEAD_IN_S = 1.5  # scripted hands hold still this long (the loop engages, the fluid settles)
 SCENES = ROOT / "config" / "scenes"

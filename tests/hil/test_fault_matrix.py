@@ -18,7 +18,7 @@ from fault_matrix_rows import (LOAD, LOAD_N, MATRIX, SIM_NICE, SIM_RATE_HZ, Run,
                                wait_trace)
 from hil_stack import (FAULT_DEVICE_NOT_LISTENING, FAULT_DEVICE_REPORTED, FAULT_SIM_STALE, LINK_FAULTS,
                        WAIT_TIMEOUT_S, Stack, assert_within_limits, engaged, force, read_csv)
-from hapfluid_proto.pycan_loopback import LoopbackBus
+from hapfluid.proto.pycan_loopback import LoopbackBus
 
 # What a bound (rig keys) does not hold and a measurement does: the rules run once per tick, on
 # what the start of that tick read (a frame or a sample arriving just after the read waits one

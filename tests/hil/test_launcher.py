@@ -1,4 +1,4 @@
-"""`make run`'s launcher (scripts/hapfluid.py): the live stack as separate processes, stopped in
+"""`make run`'s launcher (`python -m hapfluid run`): the live stack as separate processes, stopped in
 order, with every output a user opens afterwards: PNG frames, VTK particle frames (ParaView),
 CSV histories, the latency report beside cyclictest's, summary.json."""
 import csv
@@ -13,9 +13,7 @@ import matplotlib.image
 import numpy as np
 import pytest
 
-from hil_stack import ROOT
-
-from vtk_frames import read_vtk  # noqa: E402  (scripts/, on the path through hil_stack)
+from hapfluid.vtk_frames import read_vtk
 
 FRAME_W, FRAME_H = 640, 480  # the launcher renders at this size
 VTK_EVERY_S = 0.5            # the launcher's --export-every default
@@ -23,7 +21,7 @@ FLUID = 0                    # VTK "kind" (sim_gpu particles.hpp ParticleKind)
 
 
 def launch(build_dir, out, *args, timeout=90):
-    return subprocess.run([sys.executable, str(ROOT / "scripts" / "hapfluid.py"), "run", "--scene", "spoon_stirring",
+    return subprocess.run([sys.executable, "-m", "hapfluid", "run", "--scene", "spoon_stirring",
                            "--build", str(build_dir), "--out", str(out), *args],
                           capture_output=True, text=True, timeout=timeout)
 
@@ -107,7 +105,7 @@ def test_the_rendered_frames_decode_at_the_launchers_size_and_show_the_fluid(ren
 
 
 def test_the_vtk_particle_frames_parse_and_hold_the_whole_fluid(rendered_run):
-    # ParaView reads what scripts/vtk_frames.py reads (legacy binary POLYDATA). Every frame
+    # ParaView reads what hapfluid.vtk_frames reads (legacy binary POLYDATA). Every frame
     # holds every fluid particle, finite and inside the domain (0.40 x 0.22 m, walls at the edge),
     # one frame per 0.5 s of simulated time.
     out, result, summary = rendered_run
@@ -175,6 +173,6 @@ def test_a_rendered_run_stops_every_process_and_leaves_no_shared_memory(rendered
 
 
 def test_an_unknown_scene_is_named_with_the_known_ones(build_dir, tmp_path):
-    result = subprocess.run([sys.executable, str(ROOT / "scripts" / "hapfluid.py"), "run", "--scene", "no_such_scene",
+    result = subprocess.run([sys.executable, "-m", "hapfluid", "run", "--scene", "no_such_scene",
                              "--build", str(build_dir), "--out", str(tmp_path)], capture_output=True, text=True, timeout=30)
     assert result.returncode != 0 and "no_such_scene" in result.stderr and "spoon_stirring" in result.stderr

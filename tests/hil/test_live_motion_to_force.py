@@ -1,5 +1,5 @@
-"""The end-to-end motion-to-force measurement on a short live run (scripts/motion_to_force_latency.py,
-which runs scripts/hapfluid.py): every rendered sample is followed from the fake device's pose to
+"""The end-to-end motion-to-force measurement on a short live run (hapfluid.motion_to_force_latency,
+which runs the launcher): every rendered sample is followed from the fake device's pose to
 the device taking the command computed from it, the pieces are causal (none negative) and add up
 to the total. No speed is asserted beyond a sanity bound: CI machines are noisy."""
 import json
@@ -8,10 +8,8 @@ import sys
 
 import numpy as np
 
-from hil_stack import ROOT
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import motion_to_force_latency as m2f  # noqa: E402
+from hapfluid import motion_to_force_latency as m2f
 
 # A 1 kHz loop, a sim at >= 60 Hz and a 1 kHz device: a chain matched wrongly puts most samples
 # beyond this. Single samples may pass it when the VM host stalls a process for tens of ms (a
@@ -21,7 +19,7 @@ SANE_TOTAL_MS = 50.0
 
 def test_every_rendered_sample_is_followed_from_the_pose_to_the_device_and_its_pieces_add_up(build_dir, tmp_path):
     out = tmp_path / "latency"
-    result = subprocess.run([sys.executable, str(ROOT / "scripts" / "motion_to_force_latency.py"), "--build",
+    result = subprocess.run([sys.executable, "-m", "hapfluid.motion_to_force_latency", "--build",
                              str(build_dir), "--out", str(out), "--duration", "3.5"],
                             capture_output=True, text=True, timeout=180)
     assert result.returncode == 0, result.stdout + result.stderr

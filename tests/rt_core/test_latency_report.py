@@ -1,6 +1,5 @@
-"""scripts/latency_report.py: statistics from a known trace, cyclictest histogram parsing, and a
+"""hapfluid.latency_report: statistics from a known trace, cyclictest histogram parsing, and a
 short real side-by-side run."""
-import importlib.util
 import json
 import shutil
 import subprocess
@@ -11,11 +10,9 @@ import pytest
 
 
 @pytest.fixture(scope="module")
-def report(source_dir):
-    spec = importlib.util.spec_from_file_location("latency_report", source_dir / "scripts" / "latency_report.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def report():
+    from hapfluid import latency_report
+    return latency_report
 
 
 def write_trace(path, wake_latency_ns, compute_ns, io_ns=1000, fresh=None):
@@ -69,7 +66,7 @@ def test_cyclictest_histogram_percentiles(report):
 def test_bad_trace_is_refused_with_its_name(source_dir, tmp_path):
     bad = tmp_path / "nope.csv"
     bad.write_text("a,b\n1,2\n")
-    result = subprocess.run([sys.executable, str(source_dir / "scripts" / "latency_report.py"), str(bad)],
+    result = subprocess.run([sys.executable, "-m", "hapfluid.latency_report", str(bad)],
                             capture_output=True, text=True)
     assert result.returncode != 0 and "nope.csv: not a haptic-rt trace" in result.stderr
 
@@ -77,7 +74,7 @@ def test_bad_trace_is_refused_with_its_name(source_dir, tmp_path):
 @pytest.mark.skipif(not shutil.which("cyclictest"), reason="cyclictest (rt-tests) not installed")
 def test_side_by_side_run_with_cyclictest(source_dir, build_dir, tmp_path):
     trace = tmp_path / "trace.csv"
-    result = subprocess.run([sys.executable, str(source_dir / "scripts" / "latency_report.py"), str(trace),
+    result = subprocess.run([sys.executable, "-m", "hapfluid.latency_report", str(trace),
                              "--with-cyclictest", "--rig", str(source_dir / "tests/rt_core/rigs/bench_two_arms.toml"),
                              "--build", str(build_dir), "--duration", "2", "--json", str(tmp_path / "s.json")],
                             capture_output=True, text=True, timeout=60)

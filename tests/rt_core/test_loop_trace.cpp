@@ -1,5 +1,5 @@
 // What each trace record names, so a tick can be tied to the device and the sim on one clock
-// (scripts/motion_to_force_latency.py): the STATE frame whose pose the tick used, the COMMAND it
+// (hapfluid.motion_to_force_latency): the STATE frame whose pose the tick used, the COMMAND it
 // sent (wire sequence numbers, protocol.md §3) and the device_states tick the rendered sim sample
 // was computed from.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-"""The launcher's copies of a scene and a rig (scripts/hapfluid.py), read and written as TOML:
+"""The launcher's copies of a scene and a rig (hapfluid.launcher), read and written as TOML:
 the fake devices' scene keeps every table of the original with its motions later by the lead-in,
 its hands in their device frame and its meshes found from anywhere; the rig keeps every device
 with loopback sockets private to the run."""
@@ -43,9 +43,9 @@ kind = "hold"
 
 
 @pytest.fixture
-def launcher(script, monkeypatch, source_dir):
-    monkeypatch.syspath_prepend(str(source_dir / "scripts"))  # the launcher imports its neighbours
-    return script("hapfluid")
+def launcher():
+    from hapfluid import launcher
+    return launcher
 
 
 def test_the_device_scene_moves_motions_by_the_lead_in_and_hands_into_their_device_frame(launcher, source_dir,

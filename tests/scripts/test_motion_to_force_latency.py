@@ -84,8 +84,7 @@ def write(path, rows):
 
 @pytest.fixture(scope="module")
 def script():
-    sys.path.insert(0, str(__import__("pathlib").Path(__file__).resolve().parents[2] / "scripts"))
-    import motion_to_force_latency
+    from hapfluid import motion_to_force_latency
     return motion_to_force_latency
 
 
@@ -125,7 +124,7 @@ def test_the_command_line_writes_json_and_png_whose_pieces_add_up(source_dir, tm
     write(tmp_path / "device.csv", device)
     write(tmp_path / "trace.csv", trace)
     write(tmp_path / "couplings.csv", [{"device_tick": t, "publish_ns": p} for t, p in samples])
-    result = subprocess.run([sys.executable, str(source_dir / "scripts" / "motion_to_force_latency.py"), "--trace",
+    result = subprocess.run([sys.executable, "-m", "hapfluid.motion_to_force_latency", "--trace",
                              tmp_path / "trace.csv", "--device-log", tmp_path / "device.csv", "--couplings",
                              tmp_path / "couplings.csv", "--out", tmp_path / "out"],
                             capture_output=True, text=True, timeout=120)
@@ -144,7 +143,7 @@ def test_logs_from_an_older_build_are_refused_naming_the_column(source_dir, tmp_
     device, trace, samples, _ = synthetic_stack()
     write(tmp_path / "device.csv", [{k: v for k, v in r.items() if k != "rx_ns"} for r in device])
     write(tmp_path / "trace.csv", trace)
-    result = subprocess.run([sys.executable, str(source_dir / "scripts" / "motion_to_force_latency.py"), "--trace",
+    result = subprocess.run([sys.executable, "-m", "hapfluid.motion_to_force_latency", "--trace",
                              tmp_path / "trace.csv", "--device-log", tmp_path / "device.csv", "--out", tmp_path / "out"],
                             capture_output=True, text=True, timeout=120)
     assert result.returncode != 0 and "rx_ns" in result.stderr and "older build" in result.stderr

@@ -18,7 +18,7 @@ def write_history(path, devices, rows=200, gain=1.0):
 
 
 def run(source_dir, *args):
-    return subprocess.run([sys.executable, str(source_dir / "scripts" / "plot_wrenches.py"), *map(str, args)],
+    return subprocess.run([sys.executable, "-m", "hapfluid.plot_wrenches", *map(str, args)],
                           capture_output=True, text=True, timeout=120)
 
 
@@ -50,10 +50,10 @@ def test_missing_columns_are_named(source_dir, tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
-def test_each_scene_plots_the_components_its_figure_shows(source_dir, script):
+def test_each_scene_plots_the_components_its_figure_shows(source_dir):
     # Fig. 8b: a norm hides the sign, so stirring plots the stroke axis (x) and the torque about
     # the axis across it (y); the glass its spin axis (fig. 10); scenes without an entry the norms.
-    plot = script("plot_wrenches")
+    from hapfluid import plot_wrenches as plot
     stirring = plot.scene_components("spoon_stirring")
     assert (stirring.force, stirring.torque) == ("x", "y") and "stroke" in stirring.force_meaning
     assert plot.scene_components("spinning_glass_40").torque == "z"

@@ -1,6 +1,6 @@
 """scripts/scenario_checks.py: each of the paper's qualitative results is judged on a run folder's
 histories, holds on histories that show it and fails, saying why, on histories that do not.
-Synthetic run folders as scripts/hapfluid.py leaves them (summary.json, scene.toml, sim/couplings.csv,
+Synthetic run folders as the launcher leaves them (summary.json, scene.toml, sim/couplings.csv,
 device_<name>.csv), on the shipped scenes' scripts."""
 import json
 import math

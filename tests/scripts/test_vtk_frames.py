@@ -1,4 +1,4 @@
-"""scripts/vtk_frames.py, the reader of haptic-sim's frames that tests and benchmarks share: a file
+"""hapfluid.vtk_frames, the reader of haptic-sim's frames that tests and benchmarks share: a file
 in another layout, or a broken series index, is a ValueError naming the file."""
 import json
 
@@ -6,8 +6,9 @@ import pytest
 
 
 @pytest.fixture(scope="module")
-def vtk_frames(script):
-    return script("vtk_frames")
+def vtk_frames():
+    from hapfluid import vtk_frames
+    return vtk_frames
 
 
 def test_a_file_that_is_not_binary_polydata_is_refused_naming_it(vtk_frames, tmp_path):

@@ -1,6 +1,6 @@
 /* hapfluid wire protocol v1 codec. Byte layouts: firmware_bridge/protocol.md, section "Payloads".
  * Rounding, square root and scaling are written out so that the Python mirror
- * (scripts/hapfluid_proto/codec.py) performs the very same IEEE-754 operations, bit for bit. */
+ * (scripts/hapfluid/proto/codec.py) performs the very same IEEE-754 operations, bit for bit. */
 #include "hapfluid/wire/codec.h"
 
 #include <string.h>

@@ -1,4 +1,4 @@
-"""Checks what scripts/can_monitor.py decoded live from vcan0 (one JSON object per line) against
+"""Checks what hapfluid.can_monitor decoded live from vcan0 (one JSON object per line) against
 what the host commanded through haptic-device-probe (its JSON report), in one python process.
 
   check_can_monitor.py MONITOR.jsonl PROBE.json NODE FX FY FZ

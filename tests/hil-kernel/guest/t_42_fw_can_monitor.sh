@@ -1,5 +1,5 @@
 # hil-timeout: 120
-# scripts/can_monitor.py on python-can's socketcan interface decodes the live traffic between the
+# hapfluid.can_monitor on python-can's socketcan interface decodes the live traffic between the
 # project's fake arm (node 3, classic CAN) and the project's own driver harness haptic-device-probe
 # (INFO handshake, enable + force commands): the tooling a rig engineer debugs the bus with must
 # agree with the C codec on a real kernel bus.
@@ -9,7 +9,7 @@ vcan_up vcan0 16
 # Python under TCG decodes slower than the bus runs: a large socket buffer lets the monitor
 # work through the backlog instead of losing frames (the check is what it decodes, not its speed).
 sysctl -qw net.core.rmem_default=33554432 net.core.rmem_max=33554432
-"$HIL_PY" "$HIL_SRC/scripts/can_monitor.py" --interface socketcan --channel vcan0 --node 3 --json --stats \
+"$HIL_PY" -m hapfluid.can_monitor --interface socketcan --channel vcan0 --node 3 --json --stats \
     --count 2500 >monitor.jsonl 2>monitor.err &
 mon=$!
 wait_for 60 can_listening vcan0 || { cat monitor.err; fail "can_monitor never bound to vcan0"; }

@@ -1,5 +1,5 @@
 // The trace file format: CSV, one row per tick, written by haptic-trace, by haptic-rt's own
-// drainer (--trace) and by flight-recorder dumps; read by scripts/latency_report.py.
+// drainer (--trace) and by flight-recorder dumps; read by hapfluid.latency_report.
 //   tick, scheduled_ns, wake_ns, wake_latency_ns, compute_ns, io_ns, sim_age_ns, loop_flags,
 //   overruns, sim_device_tick, sim_publish_ns, send_ns, then per device i: d<i>_flags, d<i>_faults,
 //   d<i>_fx..fz (N), d<i>_tx..tz (N*m), d<i>_fresh, d<i>_miss_run, d<i>_state_seq,

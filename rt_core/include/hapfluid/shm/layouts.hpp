@@ -133,7 +133,7 @@ struct TraceDevice {
   // Wire sequence numbers (protocol.md §3; classic CAN carries their low 8 bits) of the STATE
   // frame whose pose this tick used and of the COMMAND this tick sent, and when that frame
   // arrived. With the fake device's log they tie a pose sample and a command to this tick
-  // (scripts/motion_to_force_latency.py).
+  // (hapfluid.motion_to_force_latency).
   std::uint16_t state_sequence;
   std::uint16_t command_sequence;
   std::uint32_t reserved;

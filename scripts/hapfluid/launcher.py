@@ -1,9 +1,8 @@
-#!/usr/bin/env python3
 """hapfluid launcher: runs a scene on the live stack, every part a separate process.
 
-    hapfluid.py run [--scene NAME|FILE] [--rig FILE] [--duration S] [--build DIR] [--out DIR]
-                    [--windowed] [--no-render] [--shm-prefix P] [--batch] [--export-every S]
-                    [--no-cyclictest] [--cyclictest-cpu N]
+    hapfluid run [--scene NAME|FILE] [--rig FILE] [--duration S] [--build DIR] [--out DIR]
+                [--windowed] [--no-render] [--shm-prefix P] [--batch] [--export-every S]
+                [--no-cyclictest] [--cyclictest-cpu N]
 
 A live run starts, in this order:
   haptic-fake-device       one per rig device, playing the scene's scripted hand (--motion scene:...)
@@ -20,7 +19,7 @@ exit code and leaves under out/<scene>-<timestamp>/:
   sim/couplings.csv        the coupling wrench the sim computed (on the hand), sim/bodies.csv, sim/stats.json
   sim/particles/frame_*.vtk  particle frames every --export-every s of simulated time (ParaView)
   sim/particles/particles.vtk.series  the frames' simulated times (open this in ParaView)
-  wrenches.png             fig. 8b-style plot: the scene's force and torque components (plot_wrenches.py
+  wrenches.png             fig. 8b-style plot: the scene's force and torque components (hapfluid.plot_wrenches
                            SCENE_COMPONENTS, e.g. the stroke axis for stirring) of both histories against
                            the hand's clock, the script's motions shaded
   frames/frame_*.png       rendered frames
@@ -45,11 +44,9 @@ import time
 
 import tomli_w
 
-import latency_report  # scripts/: cyclictest beside the loop, shared with latency_report.py --with-cyclictest
+from . import latency_report  # cyclictest beside the loop, shared with latency_report --with-cyclictest
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-SCENES = ROOT / "config" / "scenes"
-RIGS = ROOT / "config" / "rigs"
+from .paths import RIGS, ROOT, SCENES
 SETTLE_S = 0.5  # the sim's time before the script starts below which its fluid has not settled
 
 
@@ -486,7 +483,7 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
                                       f"step (< {SETTLE_S} s): its fluid had not settled; run with a longer --lead-in")
         # Against the wall clock (as the hand moves), not simulated time: the two differ when the
         # sim runs slower than real time and drops its backlog, and the device's curve has only the wall.
-        plot = subprocess.run([py, str(ROOT / "scripts" / "plot_wrenches.py"), str(out / "sim" / "couplings.csv"),
+        plot = subprocess.run([py, "-m", "hapfluid.plot_wrenches", str(out / "sim" / "couplings.csv"),
                                str(dev_csv), "--out", str(out / "wrenches.png"), "--labels", "sim coupling,device (applied)",
                                "--scene", scene_name, "--time", "wall", f"--time-offset={summary.get('script_offset_s', 0)}",
                                *[f"--hand={p}" for p in device_logs.values()], f"--hand-offset={lead_in_s}",
@@ -496,7 +493,7 @@ def post_process(out, rig, device_logs, scene_name, lead_in_s, started=None, cyc
     summary["rendered_frames"] = len(sorted((out / "frames").glob("frame_*.png")))
     summary["vtk_frames"] = len(sorted((out / "sim" / "particles").glob("frame_*.vtk")))
     if (out / "trace.csv").exists():
-        report = [py, str(ROOT / "scripts" / "latency_report.py"), str(out / "trace.csv"),
+        report = [py, "-m", "hapfluid.latency_report", str(out / "trace.csv"),
                   "--png", str(out / "latency.png"), "--json", str(out / "latency.json")]
         if cyclictest:
             # The loop's ticks of the window cyclictest ran in, nothing before or after it: it takes
@@ -580,7 +577,7 @@ def main():
     run.add_argument("--no-cyclictest", action="store_true",
                      help="do not run cyclictest beside the loop (its latency is then reported alone)")
     run.add_argument("--cyclictest-cpu", type=int, default=None,
-                     help="CPU for cyclictest (default: the loop's rt.cpu; hapfluid.py cyclictest_placement)")
+                     help="CPU for cyclictest (default: the loop's rt.cpu; see cyclictest_placement)")
     run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")
     run.add_argument("--backend", choices=("auto", "vulkan", "cpu"), default="auto",
                      help="simulator backend (auto: Vulkan if it keeps up with the wall clock on this machine and "

@@ -1,17 +1,16 @@
-#!/usr/bin/env python3
 """Latency report of haptic-rt's 1 kHz loop from its trace CSV (rt_core/include/hapfluid/rt/trace_csv.hpp).
 
-    latency_report.py TRACE [--png FILE] [--json FILE] [--skip-ms 200]
+    hapfluid-latency-report TRACE [--png FILE] [--json FILE] [--skip-ms 200]
         percentiles (p50, p99, p99.9, max) of wake latency, loop time (compute + device I/O), compute
         time and sim sample age; deadline misses and overruns; link quality per device; a histogram PNG.
 
-    latency_report.py TRACE --with-cyclictest --rig RIG [--build build] [--duration 30] [--sim-rate 100]
+    hapfluid-latency-report TRACE --with-cyclictest --rig RIG [--build build] [--duration 30] [--sim-rate 100]
         runs haptic-rt (simulated devices unless --real-devices) writing TRACE, a stand-in sim, and
         cyclictest (rt-tests) at the rig's SCHED_FIFO priority, period and CPU over the same window,
         then prints haptic-rt's wake latency next to cyclictest's.
 
-    latency_report.py TRACE --cyclictest-log FILE --window-ns START:END
-        a run made elsewhere (scripts/hapfluid.py: cyclictest beside the live stack, started with
+    hapfluid-latency-report TRACE --cyclictest-log FILE --window-ns START:END
+        a run made elsewhere (the launcher: cyclictest beside the live stack, started with
         start_cyclictest): the trace's ticks scheduled in [START, END] (CLOCK_MONOTONIC ns, the
         window cyclictest ran) next to cyclictest's histogram output in FILE.
 
@@ -31,7 +30,7 @@ import time
 
 import numpy as np
 
-SOURCE_DIR = pathlib.Path(__file__).resolve().parent.parent
+from .paths import ROOT as SOURCE_DIR
 DEGRADED_FLAGS = {0: "no SCHED_FIFO", 1: "memory not locked", 2: "not pinned to its CPU"}
 NOT_PREEMPT_RT = 1 << 3
 

@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Force/torque plots like the paper's figures 8-11, from wrench histories.
 
 Reads any CSV with a time column `t` (s) and force/torque columns `fx,fy,fz,tx,ty,tz` (N, N·m),
@@ -7,7 +6,7 @@ render) or the fake device's own log (what the hand felt). One run gives one fig
 panel and a torque panel per device (fig. 8, 9, 11); several runs are overlaid, one colour per run
 (fig. 10: the four container viscosities).
 
-    plot_wrenches.py RUN_OR_CSV [RUN_OR_CSV ...] --out plot.png [--title T] [--labels a,b,...]
+    hapfluid-plot-wrenches RUN_OR_CSV [RUN_OR_CSV ...] --out plot.png [--title T] [--labels a,b,...]
                      [--scene NAME] [--component norm|x|y|z] [--torque-component norm|x|y|z]
 
 --scene picks the components the paper's figure of that scene shows (SCENE_COMPONENTS); --component
@@ -28,7 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 COLUMNS = ("t", "fx", "fy", "fz", "tx", "ty", "tz")
-SCENES = pathlib.Path(__file__).resolve().parent.parent / "config" / "scenes"
+from .paths import SCENES
 
 
 class Components:
@@ -171,7 +170,7 @@ def main():
                         help="time axis: sim (column t, simulated time) or wall (column wall_s: the wall clock, as "
                              "the hand moves; differs from simulated time when the sim runs slower than real time)")
     parser.add_argument("--time-offset", default=None,
-                        help="seconds subtracted from the time axis, one value or one per run (hapfluid.py "
+                        help="seconds subtracted from the time axis, one value or one per run (the launcher's "
                              "summary.json script_offset_s: then 0 is the scene script's start, its motions marked)")
     parser.add_argument("--hand", action="append", default=[], type=pathlib.Path,
                         help="a fake device log device_<name>.csv: the hand's velocity along the force component "

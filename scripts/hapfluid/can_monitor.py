@@ -1,12 +1,11 @@
-#!/usr/bin/env python3
 """Decode hapfluid device traffic: live (python-can: socketcan on a rig, the loopback bus in tests
 and without CAN hardware) or from a recorded log (candump .log, .asc, .blf, anything python-can
 reads). Every frame is checked by the protocol codec (CRC, ranges, frame sets) and, with --dbc
 signals, shown through the project's DBC with cantools, exactly as candump + cantools would.
 
-  can_monitor.py --interface socketcan --channel can0
-  can_monitor.py --interface hapfluid_loopback --channel /tmp/hapfluid-left.sock --duration 2 --stats
-  can_monitor.py --log run.blf --node 1 --json
+  hapfluid-can-monitor --interface socketcan --channel can0
+  hapfluid-can-monitor --interface hapfluid_loopback --channel /tmp/hapfluid-left.sock --duration 2 --stats
+  hapfluid-can-monitor --log run.blf --node 1 --json
 """
 from __future__ import annotations
 
@@ -17,14 +16,12 @@ import pathlib
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-
 import can  # noqa: E402
 import cantools  # noqa: E402
 
-from hapfluid_proto import codec, pycan_loopback  # noqa: E402
+from .paths import DBC as DEFAULT_DBC
+from .proto import codec
 
-DEFAULT_DBC = pathlib.Path(__file__).resolve().parent.parent / "firmware_bridge" / "dbc" / "hapfluid.dbc"
 
 
 class Decoder:
@@ -123,7 +120,6 @@ def main(argv=None) -> int:
 
     dbc = cantools.database.load_file(str(args.dbc)) if args.signals else None
     decoder = Decoder(set(args.node) if args.node else None, dbc)
-    pycan_loopback.register()
     if args.log:
         if not args.log.exists():
             p.error(f"--log {args.log}: no such file")

@@ -1,8 +1,7 @@
-#!/usr/bin/env python3
 """End-to-end motion-to-force latency of the live stack: from the fake device sampling the hand's
 pose to the device taking the command whose wrench the simulator computed FROM that pose.
 
-Runs the stirring scene on the live stack (scripts/hapfluid.py: fake hand stroking, haptic-rt,
+Runs the stirring scene on the live stack (the launcher: fake hand stroking, haptic-rt,
 haptic-sim --live, haptic-trace), or reads a finished run, and follows every sim sample the loop
 rendered back to its pose, on one clock (CLOCK_MONOTONIC, shared by every process on the machine):
 
@@ -30,7 +29,7 @@ velocity; the lag maximising their (anti-)correlation is printed as well. It is 
 physics (the spoon follows the hand through its coupling spring, the fluid's drag builds up),
 ~200-250 ms in the stirring scene, not transport.
 
-    motion_to_force_latency.py [--build build] [--out out/latency] [--duration 8]
+    hapfluid-motion-to-force [--build build] [--out out/latency] [--duration 8]
                                [--run RUN_DIR] [--trace CSV] [--device-log CSV] [--couplings CSV]
 
 Writes <out>/motion_to_force.png (histogram and per-piece breakdown) and <out>/motion_to_force.json.
@@ -44,7 +43,7 @@ import sys
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
+from .paths import ROOT
 PIECES = ("device_to_loop", "loop_to_sim", "sim_to_loop", "loop_to_device")
 SEQUENCE_MODULUS = 256      # classic CAN carries the low 8 bits of every sequence number
 MATCH_WINDOW_NS = 128e6     # half the modulus at 1 kHz: a match within it is unambiguous
@@ -241,7 +240,7 @@ def plot(result: dict, p: dict, path: pathlib.Path):
 
 
 def run_stack(args, run: pathlib.Path):
-    cmd = [sys.executable, str(ROOT / "scripts" / "hapfluid.py"), "run", "--scene", "spoon_stirring", "--build",
+    cmd = [sys.executable, "-m", "hapfluid", "run", "--scene", "spoon_stirring", "--build",
            args.build, "--out", str(run), "--no-render", "--duration", str(args.duration)]
     print("motion_to_force_latency: " + " ".join(cmd), file=sys.stderr, flush=True)
     if subprocess.run(cmd, stdout=subprocess.DEVNULL).returncode != 0:
@@ -262,7 +261,7 @@ def main():
     ap.add_argument("--build", default="build")
     ap.add_argument("--out", default=str(ROOT / "out" / "latency"))
     ap.add_argument("--duration", type=float, default=8.0)
-    ap.add_argument("--run", default=None, help="analyse an existing hapfluid.py run folder instead of running")
+    ap.add_argument("--run", default=None, help="analyse an existing launcher run folder instead of running")
     ap.add_argument("--trace", default=None, help="trace CSV (default: <run>/trace.csv)")
     ap.add_argument("--device-log", default=None, help="the fake device's --log CSV (default: <run>/device_<name>.csv)")
     ap.add_argument("--couplings", default=None, help="the sim's couplings.csv (default: <run>/sim/couplings.csv)")

@@ -2,12 +2,13 @@
 
 The bus end (haptic-fake-device) listens on a Unix SOCK_SEQPACKET socket and relays every peer's
 frames to the other peers; each packet is a kernel `struct can_frame` (16 bytes) or `struct
-canfd_frame` (72 bytes). This adapter connects as a peer, so python-can tools (can_monitor.py,
+canfd_frame` (72 bytes). This adapter connects as a peer, so python-can tools (hapfluid.can_monitor,
 cantools, your own scripts) see the very bytes a SocketCAN bus would carry:
 
-    from hapfluid_proto import pycan_loopback
-    pycan_loopback.register()            # adds interface "hapfluid_loopback" to python-can
     bus = can.Bus(interface="hapfluid_loopback", channel="/tmp/hapfluid-left.sock")
+
+python-can finds the interface through the `can.interface` entry point the hapfluid package
+declares (scripts/pyproject.toml), so nothing needs registering once the package is installed.
 """
 from __future__ import annotations
 
@@ -28,16 +29,6 @@ CANFD_ESI = 0x02
 CAN_FRAME = struct.Struct("=IB3x8s")     # struct can_frame
 CANFD_FRAME = struct.Struct("=IBB2x64s")  # struct canfd_frame
 RECONNECT_PERIOD_S = 0.1  # after the bus went away (the fake device restarted)
-
-
-def register() -> None:
-    """Makes `can.Bus(interface="hapfluid_loopback", ...)` work in this process."""
-    can.interfaces.BACKENDS["hapfluid_loopback"] = ("hapfluid_proto.pycan_loopback", "LoopbackBus")
-    valid = frozenset(can.interfaces.BACKENDS)
-    # python-can validates the name against copies of this set taken at import time
-    for module in (can.interfaces, can.util, can):
-        if hasattr(module, "VALID_INTERFACES"):
-            module.VALID_INTERFACES = valid
 
 
 def pack(msg: can.Message) -> bytes:

@@ -1,7 +1,7 @@
 """Bus-load budget of protocol v1 (the table in firmware_bridge/protocol.md comes from here).
 
 Frame lengths follow ISO 11898-1 for 11-bit identifiers: nominal (no stuff bits) and worst case
-(maximum dynamic stuffing). Run `python -m hapfluid_proto.busload` from scripts/ for the table.
+(maximum dynamic stuffing). Run `python -m hapfluid.proto.busload` for the table.
 """
 from __future__ import annotations
 
