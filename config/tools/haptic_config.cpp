@@ -13,6 +13,7 @@
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/config/file_kind.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/config/scene.hpp"
 
@@ -33,7 +34,7 @@ int main(int argc, char** argv) {
   if (const int code = parse_command_line(app, argc, argv); code >= 0) return code;
   if (!rig_path.empty()) files.insert(files.begin(), rig_path);
   if (files.empty()) {
-    std::fprintf(stderr, "haptic-config: check: no FILE given (haptic-config --help for usage)\n");
+    hapfluid::log::error("check: no FILE given (haptic-config --help for usage)");
     return kUsageExitCode;
   }
 
@@ -70,6 +71,6 @@ int main(int argc, char** argv) {
       for (const auto& p : error.problems()) std::fprintf(stderr, "%s\n", p.to_string().c_str());
     }
   }
-  if (bad) std::fprintf(stderr, "haptic-config: %d of %zu files have errors\n", bad, files.size());
+  if (bad) hapfluid::log::error("%d of %zu files have errors", bad, files.size());
   return bad ? 1 : 0;
 }

@@ -18,12 +18,15 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/device/loopback.hpp"
 #include "hapfluid/device/message_link.hpp"
 
 using namespace hapfluid::device;
 
 namespace {
+
+namespace log = hapfluid::log;
 
 std::uint64_t now_ns() {
   timespec ts;
@@ -102,8 +105,8 @@ int main(int argc, char** argv) {
     auto pct = [&](double p) {
       return r.empty() ? std::nan("") : r[std::min(r.size() - 1, static_cast<std::size_t>(p * r.size()))];
     };
-    std::fprintf(stderr, "loopback ping-pong %-5s p50 %.1f us, p99 %.1f us (%zu samples)\n", to_string(f), pct(0.5),
-                 pct(0.99), r.size());
+    log::info("loopback ping-pong %-5s p50 %.1f us, p99 %.1f us (%zu samples)", to_string(f), pct(0.5),
+              pct(0.99), r.size());
     records.push_back(hapfluid::config::bench_record("firmware_bridge_loopback_ping_pong",
                                                      {{"framing", to_string(f)}, {"iterations", iterations}},
                                                      {{"rtt_p50_us", pct(0.5)}, {"rtt_p99_us", pct(0.99)},
@@ -112,7 +115,7 @@ int main(int argc, char** argv) {
   try {
     hapfluid::config::write_json_atomically(out, records);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "firmware_bridge_loopback_ping_pong: %s\n", e.what());
+    log::error("%s", e.what());
     return 1;
   }
   return 0;

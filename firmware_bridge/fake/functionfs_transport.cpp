@@ -21,6 +21,8 @@
 #include <mutex>
 #include <thread>
 
+#include "hapfluid/config/log.hpp"
+
 namespace hapfluid::fake {
 
 struct FunctionFsTransport::Shared {
@@ -213,7 +215,7 @@ FunctionFsTransport::~FunctionFsTransport() {
   const bool writer_ended = stop_thread(s.writer, s.writer_done, 2000);
   const bool reader_ended = stop_thread(s.reader, s.reader_done, 2000);
   if (!writer_ended || !reader_ended)
-    std::fprintf(stderr, "FunctionFS %s: an endpoint thread did not end within 2 s; left detached\n",
+    log::warning("FunctionFS %s: an endpoint thread did not end within 2 s; left detached",
                  mount_dir_.c_str());
   ::close(s.ep_in);
   ::close(s.ep_out);

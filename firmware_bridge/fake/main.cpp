@@ -22,6 +22,7 @@
 #include "hidg_transport.hpp"
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/hid_descriptors.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -352,8 +353,8 @@ int run(const Options& o) {
     if (!injecting && g_inject) {
       injecting = true;
       inject_from_ns = wake;
-      std::fprintf(stderr, "haptic-fake-device: fault injection begins at t=%.3f s, tick_ns %llu (SIGUSR1)\n", t,
-                   static_cast<unsigned long long>(wake));
+      log::notice("fault injection begins at t=%.3f s, tick_ns %llu (SIGUSR1)", t,
+                  static_cast<unsigned long long>(wake));
     }
     since = (wake - inject_from_ns) * 1e-9;
 
@@ -362,7 +363,7 @@ int run(const Options& o) {
     const bool in_bus_off = bus_off_now();
     const bool answering = !injecting || o.stop_answering_after_s < 0 || since < o.stop_answering_after_s;
     if (!answering && !stopped_answering_logged) {
-      std::fprintf(stderr, "haptic-fake-device: fault injection: stopped answering at t=%.3f s\n", t);
+      log::notice("fault injection: stopped answering at t=%.3f s", t);
       stopped_answering_logged = true;
     }
     bool info_requested = false;
@@ -382,7 +383,7 @@ int run(const Options& o) {
       e.length = 8;
       link->transport().send(e);
       bus_off_reported = true;
-      std::fprintf(stderr, "haptic-fake-device: fault injection: bus-off at t=%.3f s\n", t);
+      log::notice("fault injection: bus-off at t=%.3f s", t);
     }
     if (bus_off_reported && !in_bus_off && !bus_restarted) {
       device::WireFrame e;
@@ -395,7 +396,7 @@ int run(const Options& o) {
     const config::PoseTwist target = hand.target(t);
     firmware.step(t, dt, target);
     if (firmware.watchdog_trip_s() == t)
-      std::fprintf(stderr, "haptic-fake-device: watchdog: no valid command for %.1f ms, motors off at t=%.3f s\n",
+      log::warning("watchdog: no valid command for %.1f ms, motors off at t=%.3f s",
                    (t - firmware.watchdog_trip_last_command_s()) * 1e3, t);
 
     // 4. transmit
@@ -500,7 +501,7 @@ int main(int argc, char** argv) {
     }
     return run(options);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptic-fake-device: %s\n", e.what());
+    log::error("%s", e.what());
     return 2;
   }
 }

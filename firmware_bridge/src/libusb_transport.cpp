@@ -21,6 +21,7 @@
 #include <cstring>
 #include <thread>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/device/frame_handoff.hpp"
 #include "hapfluid/device/reopen_worker.hpp"
 #include "hapfluid/device/usb_transfer_book.hpp"
@@ -232,8 +233,8 @@ class LibusbTransport final : public HandoffTransport {
     }
     if (live_ && !book_.quiescent()) {
       // Never free a transfer libusb still owns: leak this connection rather than corrupt memory.
-      std::fprintf(stderr, "libusb %s: %d IN / %d OUT transfers did not return within %d ms of cancelling; "
-                   "the connection is left open\n", address_.c_str(), book_.in_flight(), book_.out_flight(),
+      log::warning("libusb %s: %d IN / %d OUT transfers did not return within %d ms of cancelling; "
+                   "the connection is left open", address_.c_str(), book_.in_flight(), book_.out_flight(),
                    kCloseLimitMs);
     } else {
       dispose(live_);

@@ -1,4 +1,5 @@
 // The one table of which open errors mean "not there yet" and which mean "never, as configured".
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/device/open_failure.hpp"
 
 #include <libusb-1.0/libusb.h>
@@ -53,7 +54,7 @@ bool RefusalLog::note(const std::string& transport, const OpenAttempt& attempt) 
     last_ = attempt.why;
   }
   if (logged_ || ++repeats_ < kRefusalsBeforeLog) return false;
-  std::fprintf(stderr, "%s: the device is there but does not open: %s (still trying)\n", transport.c_str(),
+  log::warning("%s: the device is there but does not open: %s (still trying)", transport.c_str(),
                attempt.why.c_str());
   logged_ = true;
   return true;

@@ -17,6 +17,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/device/haptic_arm.hpp"
 #include "hapfluid/device/open_device.hpp"
@@ -82,7 +83,7 @@ int parse(int argc, char** argv, Options& o) {
     o.from_rig = true;
   }
   if (o.device.transport.address.empty()) {
-    std::fprintf(stderr, "haptic-device-probe: --address (or --rig with --device) is required (haptic-device-probe --help for usage)\n");
+    log::error("--address (or --rig with --device) is required (haptic-device-probe --help for usage)");
     return config::kUsageExitCode;
   }
   return -1;
@@ -96,7 +97,7 @@ double percentile(std::vector<double> v, double p) {
 
 int run(const Options& o) {
   auto dev = device::open_device(o.device, o.from_rig ? device::RigFitCheck::enforce : device::RigFitCheck::skip);
-  if (!dev->health().connected) std::fprintf(stderr, "haptic-device-probe: %s\n", device::silent_device_hint(o.device, dev->health()).c_str());
+  if (!dev->health().connected) log::warning("%s", device::silent_device_hint(o.device, dev->health()).c_str());
   auto* arm = dynamic_cast<device::HapticArm*>(dev.get());
   const std::size_t max_ticks = static_cast<std::size_t>(o.duration_s * 1000) + 16;
   std::vector<double> rtt_us;
@@ -215,7 +216,7 @@ int main(int argc, char** argv) {
     if (const int code = parse(argc, argv, o); code >= 0) return code;
     return run(o);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptic-device-probe: %s\n", e.what());
+    log::error("%s", e.what());
     return 2;
   }
 }

@@ -11,12 +11,15 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/render/fluid_renderer.hpp"
 #include "hapfluid/render/synthetic_source.hpp"
 
 using namespace hapfluid::render;
 
 namespace {
+
+namespace log = hapfluid::log;
 
 struct Case {
   uint32_t particles, width, height;
@@ -68,12 +71,11 @@ hapfluid::config::Json run_case(VulkanContext& ctx, const Case& c, int frames) {
        {"min_ms_per_frame", best}, {"median_ms_per_frame", median}, {"gpu_ms_per_frame", mean(gpu)},
        {"scene_ms", sum.scene_ms / n}, {"splat_ms", sum.splat_ms / n}, {"filter_ms", sum.filter_ms / n},
        {"normals_ms", sum.normals_ms / n}, {"composite_ms", sum.composite_ms / n}, {"readback_ms", sum.copy_out_ms / n}});
-  std::fprintf(stderr,
-               "bench_render: %u particles %ux%u, %d filter passes: %.1f ms/frame wall (%.1f frames/s, median %.1f, best %.1f), GPU %.1f ms = "
-               "scene %.1f + splat %.1f + filter %.1f + normals %.1f + composite %.1f + read-back %.1f\n",
-               c.particles, c.width, c.height, c.filter_iterations, mean(wall), 1000.0 / mean(wall), median, best, mean(gpu),
-               sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n, sum.normals_ms / n, sum.composite_ms / n,
-               sum.copy_out_ms / n);
+  log::info("%u particles %ux%u, %d filter passes: %.1f ms/frame wall (%.1f frames/s, median %.1f, best %.1f), GPU %.1f ms = "
+            "scene %.1f + splat %.1f + filter %.1f + normals %.1f + composite %.1f + read-back %.1f",
+            c.particles, c.width, c.height, c.filter_iterations, mean(wall), 1000.0 / mean(wall), median, best, mean(gpu),
+            sum.scene_ms / n, sum.splat_ms / n, sum.filter_ms / n, sum.normals_ms / n, sum.composite_ms / n,
+            sum.copy_out_ms / n);
   return record;
 }
 
@@ -99,7 +101,7 @@ int main(int argc, char** argv) {
       hapfluid::config::write_json_atomically(out, records);
     return 0;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_render: %s\n", e.what());
+    log::error("%s", e.what());
     return 1;
   }
 }

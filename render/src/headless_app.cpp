@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/render/apps.hpp"
 
 namespace hapfluid::render {
@@ -49,7 +50,7 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
     OrbitCamera camera = renderer.camera();
     options.camera.apply(camera);
     renderer.set_camera(camera);
-    std::fprintf(stderr, "haptic-render: headless on %s\n", renderer.describe().c_str());
+    log::info("headless on %s", renderer.describe().c_str());
 
     const auto start = std::chrono::steady_clock::now();
     Frame frame;
@@ -68,11 +69,10 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
       const PassTimes t = renderer.pass_times();
       gpu_ms_sum += t.total_ms;
       if (options.print_timings && t.valid)
-        std::fprintf(stderr,
-                     "haptic-render: frame %llu: %zu fluid particles, %.1f ms (scene %.1f, splat %.1f, filter %.1f, "
-                     "normals %.1f, composite %.1f, read-back %.1f)\n",
-                     static_cast<unsigned long long>(frame.index), frame.fluid_m.size(), t.total_ms, t.scene_ms,
-                     t.splat_ms, t.filter_ms, t.normals_ms, t.composite_ms, t.copy_out_ms);
+        log::info("frame %llu: %zu fluid particles, %.1f ms (scene %.1f, splat %.1f, filter %.1f, "
+                  "normals %.1f, composite %.1f, read-back %.1f)",
+                  static_cast<unsigned long long>(frame.index), frame.fluid_m.size(), t.total_ms, t.scene_ms,
+                  t.splat_ms, t.filter_ms, t.normals_ms, t.composite_ms, t.copy_out_ms);
       write_png(options.out_dir / numbered("frame_", uint64_t(summary.frames), ".png"), image);
       if (options.dump_buffers) dump_buffers(renderer, buffers_dir, uint64_t(summary.frames));
       ++summary.frames;
@@ -81,22 +81,22 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
   ctx.destroy_device();  // count what the validation layer says about leaks too
   summary.mean_frame_ms = summary.frames ? gpu_ms_sum / double(summary.frames) : 0.0;
   summary.validation_messages = ctx.validation_errors() + ctx.validation_warnings();
-  std::fprintf(stderr, "haptic-render: wrote %ld frames to %s (mean %.1f ms per frame)\n", summary.frames,
-               options.out_dir.string().c_str(), summary.mean_frame_ms);
+  log::info("wrote %ld frames to %s (mean %.1f ms per frame)", summary.frames,
+            options.out_dir.string().c_str(), summary.mean_frame_ms);
 
   if (options.mp4 && summary.frames > 0) {
     if (!ffmpeg_available()) {
-      std::fprintf(stderr, "haptic-render: ffmpeg not found: skipping the MP4 (the PNG frames are in %s)\n",
-                   options.out_dir.string().c_str());
+      log::notice("ffmpeg not found: skipping the MP4 (the PNG frames are in %s)",
+                  options.out_dir.string().c_str());
     } else {
       const auto mp4 = options.out_dir / "frames.mp4";
       const std::string command = "ffmpeg -loglevel error -y -framerate " + std::to_string(options.mp4_frame_rate_hz) +
                                   " -i '" + (options.out_dir / "frame_%06d.png").string() +
                                   "' -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' '" + mp4.string() + "'";
       if (std::system(command.c_str()) != 0)
-        std::fprintf(stderr, "haptic-render: ffmpeg failed; the PNG frames are in %s\n", options.out_dir.string().c_str());
+        log::warning("ffmpeg failed; the PNG frames are in %s", options.out_dir.string().c_str());
       else
-        std::fprintf(stderr, "haptic-render: wrote %s\n", mp4.string().c_str());
+        log::info("wrote %s", mp4.string().c_str());
     }
   }
   return summary;

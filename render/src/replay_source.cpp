@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/render/scene_description.hpp"
 #include "hapfluid/render/vtk_reader.hpp"
 
@@ -54,7 +55,7 @@ FrameStatus ReplaySource::next_frame(Frame& frame) {
   frame.solid_m.clear();
   auto kinds = vtk.point_scalars.find(kind_field_);
   if (kinds == vtk.point_scalars.end() && !warned_no_kind_) {
-    std::fprintf(stderr, "haptic-render: %s: no point array \"%s\"; drawing every point as fluid\n",
+    log::warning("%s: no point array \"%s\"; drawing every point as fluid",
                  file.string().c_str(), kind_field_.c_str());
     warned_no_kind_ = true;
   }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/shm/layouts.hpp"
 
 namespace hapfluid::render {
@@ -20,8 +21,8 @@ void ShmSource::attach_if_due(std::uint64_t now_ns) {
     status_ = particles_.check_liveness(now_ns, std::uint64_t(options_.stale_after_s * kNsPerS));
     if (status_ == shm::WriterStatus::dead || status_ == shm::WriterStatus::replaced ||
         status_ == shm::WriterStatus::closed || status_ == shm::WriterStatus::corrupt) {
-      std::fprintf(stderr, "haptic-render: the simulator's particles channel is %s: waiting for a new writer\n",
-                   shm::to_string(status_));
+      log::notice("the simulator's particles channel is %s: waiting for a new writer",
+                  shm::to_string(status_));
       particles_ = shm::LatestReader();
       devices_ = shm::LatestReader();
     }
@@ -35,7 +36,7 @@ void ShmSource::attach_if_due(std::uint64_t now_ns) {
     const std::uint64_t bytes = reader.segment().layout().payload_bytes;
     if (bytes < sizeof(shm::ParticleFrameHeader) ||
         (bytes - sizeof(shm::ParticleFrameHeader)) % sizeof(shm::ParticleRecord) != 0) {
-      std::fprintf(stderr, "haptic-render: %s holds %llu-byte records, not particle frames: ignoring it\n",
+      log::warning("%s holds %llu-byte records, not particle frames: ignoring it",
                    name.c_str(), (unsigned long long)bytes);
       return;
     }
@@ -44,8 +45,8 @@ void ShmSource::attach_if_due(std::uint64_t now_ns) {
     particles_ = std::move(reader);
     last_generation_ = 0;
     status_ = shm::WriterStatus::live;
-    std::fprintf(stderr, "haptic-render: attached to %s (up to %llu particles)\n", name.c_str(),
-                 (unsigned long long)((bytes - sizeof(shm::ParticleFrameHeader)) / sizeof(shm::ParticleRecord)));
+    log::info("attached to %s (up to %llu particles)", name.c_str(),
+              (unsigned long long)((bytes - sizeof(shm::ParticleFrameHeader)) / sizeof(shm::ParticleRecord)));
   } catch (const shm::ShmError&) {
     status_ = shm::WriterStatus::not_attached;  // no simulator yet: try again later, quietly
   }

@@ -1,3 +1,4 @@
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/render/vk_context.hpp"
 
 #include <cstdio>
@@ -75,7 +76,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL VulkanContext::on_message(VkDebugUtilsMessageSeve
   (error ? self->errors_ : self->warnings_)++;
   std::string text = std::string(error ? "validation error: " : "validation warning: ") +
                      (data && data->pMessage ? data->pMessage : "(no message)");
-  std::fprintf(stderr, "haptic-render: %s\n", text.c_str());
+  (error ? log::error : log::warning)("%s", text.c_str());
   std::lock_guard lock(self->messages_mutex_);
   if (self->messages_.size() < 100) self->messages_.push_back(std::move(text));
   return VK_FALSE;

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/render/apps.hpp"
 #include "swapchain.hpp"
 #include "text_overlay.hpp"
@@ -206,7 +207,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
       glfwSetKeyCallback(window, on_key);
       Swapchain swapchain(ctx, surface, window);
       TextOverlay overlay(ctx, swapchain.format());
-      std::fprintf(stderr, "haptic-render: window on %s\n", renderer.describe().c_str());
+      log::info("window on %s", renderer.describe().c_str());
 
       FrameSync sync(ctx);
       HostBuffer screenshot;
@@ -281,7 +282,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
         summary.mean_frame_ms += times.total_ms;
       }
       if (summary.frames) summary.mean_frame_ms /= double(summary.frames);
-      std::fprintf(stderr, "haptic-render: presented %ld frames (%.1f frames/s at the end)\n", summary.frames, render_fps);
+      log::info("presented %ld frames (%.1f frames/s at the end)", summary.frames, render_fps);
     }
     vkDestroySurfaceKHR(ctx.instance(), surface, nullptr);
     ctx.destroy_device();  // count what the validation layer says about leaks too

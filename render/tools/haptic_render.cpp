@@ -14,6 +14,7 @@
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/render/apps.hpp"
 #include "hapfluid/render/replay_source.hpp"
@@ -42,7 +43,7 @@ struct Args {
 
 // A command line that cannot run: one line naming what is wrong, exit 2.
 [[noreturn]] void bad(const std::string& message) {
-  std::fprintf(stderr, "haptic-render: %s (haptic-render --help for usage)\n", message.c_str());
+  log::error("%s (haptic-render --help for usage)", message.c_str());
   std::exit(config::kUsageExitCode);
 }
 
@@ -193,14 +194,14 @@ int main(int argc, char** argv) {
       summary = run_windowed(*source, w);
     }
     if (a.validation && summary.validation_messages > 0) {
-      std::fprintf(stderr, "haptic-render: the validation layer reported %d messages\n", summary.validation_messages);
+      log::warning("the validation layer reported %d messages", summary.validation_messages);
       return 3;
     }
     return 0;
   } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "haptic-render: %s\n", e.what());
+    log::error("%s", e.what());
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptic-render: %s\n", e.what());
+    log::error("%s", e.what());
   }
   return 1;
 }

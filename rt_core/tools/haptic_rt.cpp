@@ -14,6 +14,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/rt/device_seam.hpp"
 #include "hapfluid/rt/loop.hpp"
@@ -63,10 +64,10 @@ int main(int argc, char** argv) {
   try {
     rig = config::load_rig(args.rig);
   } catch (const config::ConfigError& e) {
-    std::fprintf(stderr, "haptic-rt: %s\n", e.what());
+    log::error("%s", e.what());
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptic-rt: %s\n", e.what());
+    log::error("%s", e.what());
     return 2;
   }
   if (!args.prefix.empty()) rig.rt.shm.prefix = args.prefix;
@@ -75,22 +76,22 @@ int main(int argc, char** argv) {
     args.flight_dir = std::string(tmp && *tmp ? tmp : "/tmp") + "/hapfluid-flight";
   }
 
-  std::fprintf(stderr, "haptic-rt: rig \"%s\" (%s): period %lld ns, SCHED_FIFO %d, cpu %d, policy %s, shm /%s.*\n",
-               rig.name.c_str(), args.rig.c_str(), (long long)rig.rt.period_ns, rig.rt.priority, rig.rt.cpu,
-               config::to_string(rig.rt.policy), rig.rt.shm.prefix.c_str());
+  log::info("rig \"%s\" (%s): period %lld ns, SCHED_FIFO %d, cpu %d, policy %s, shm /%s.*",
+            rig.name.c_str(), args.rig.c_str(), (long long)rig.rt.period_ns, rig.rt.priority, rig.rt.cpu,
+            config::to_string(rig.rt.policy), rig.rt.shm.prefix.c_str());
   std::vector<std::unique_ptr<device::Device>> devices;
   for (const auto& d : rig.devices) {
-    std::fprintf(stderr, "haptic-rt: device \"%s\": wrench_mode %s, safety limits:\n%s", d.name.c_str(),
-                 config::to_string(d.wrench_mode), safety::describe(safety::make_safety_config(d, rig.rt.period_ns)).c_str());
+    log::info("device \"%s\": wrench_mode %s, safety limits:\n%s", d.name.c_str(), config::to_string(d.wrench_mode),
+              safety::describe(safety::make_safety_config(d, rig.rt.period_ns)).c_str());
     std::string error;
     auto device = rt::open_rig_device(d, args.simulated ? rt::DeviceBackend::simulated : rt::DeviceBackend::driver, error);
     if (!device) {
-      std::fprintf(stderr, "haptic-rt: %s\n", error.c_str());
+      log::error("%s", error.c_str());
       return 2;
     }
-    if (args.simulated) std::fprintf(stderr, "haptic-rt: device \"%s\": SIMULATED handle (no hardware)\n", d.name.c_str());
+    if (args.simulated) log::notice("device \"%s\": SIMULATED handle (no hardware)", d.name.c_str());
     else if (!device->health().connected)
-      std::fprintf(stderr, "haptic-rt: %s; meanwhile the loop holds it at a link fault with zero wrench\n",
+      log::warning("%s; meanwhile the loop holds it at a link fault with zero wrench",
                    rt::silent_device_hint(d, device->health(), args.rig).c_str());
     devices.push_back(std::move(device));
   }
@@ -105,7 +106,7 @@ int main(int argc, char** argv) {
     options.trace_path = args.trace;
     supervisor = std::make_unique<rt::Supervisor>(*loop, options);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "haptic-rt: %s\n", e.what());
+    log::error("%s", e.what());
     return 2;
   }
   g_loop = loop.get();
@@ -117,40 +118,39 @@ int main(int argc, char** argv) {
   supervisor->start();
   rt::RtSetupReport report = rt::setup_realtime(rig.rt);
   if (report.refused) {
-    std::fprintf(stderr, "haptic-rt: rt.policy = enforce and the real-time set-up failed; refusing to run:\n%s",
-                 report.messages.c_str());
+    log::error("rt.policy = enforce and the real-time set-up failed; refusing to run:\n%s",
+               report.messages.c_str());
     supervisor->stop();
     return 3;
   }
   if (report.degraded_flags & rt::kDegradedMask)
-    std::fprintf(stderr,
-                 "haptic-rt: WARNING ************************************************************\n"
-                 "haptic-rt: WARNING running DEGRADED (rt.policy = ignore); every trace record is marked:\n%s"
-                 "haptic-rt: WARNING ************************************************************\n",
+    log::warning("WARNING ************************************************************\n"
+                 "WARNING running DEGRADED (rt.policy = ignore); every trace record is marked:\n%s"
+                 "WARNING ************************************************************",
                  report.messages.c_str());
   else if (!report.messages.empty())
-    std::fprintf(stderr, "haptic-rt: note: %s", report.messages.c_str());
+    log::notice("note: %s", report.messages.c_str());
   if (!(report.degraded_flags & rt::loop_no_affinity)) {
     int moved = rt::keep_other_threads_off_cpu(rig.rt.cpu);
-    if (moved) std::fprintf(stderr, "haptic-rt: %d helper thread(s) kept off the loop's CPU %d\n", moved, rig.rt.cpu);
+    if (moved) log::info("%d helper thread(s) kept off the loop's CPU %d", moved, rig.rt.cpu);
   }
   rt::prefault_heap(8u << 20);
   rt::prefault_stack(256u << 10);
   loop->set_degraded_flags(report.degraded_flags);
-  std::fprintf(stderr, "haptic-rt: loop thread tid %ld running%s\n", (long)syscall(SYS_gettid),
-               args.duration_s > 0 ? (" for " + std::to_string(args.duration_s) + " s").c_str() : "");
+  log::info("loop thread tid %ld running%s", (long)syscall(SYS_gettid),
+            args.duration_s > 0 ? (" for " + std::to_string(args.duration_s) + " s").c_str() : "");
 
   loop->run(static_cast<std::uint64_t>(args.duration_s * 1e9));
 
   supervisor->stop();
-  std::fprintf(stderr, "haptic-rt: stopped after %llu ticks, %llu overruns, %llu flight-recorder dumps\n",
-               (unsigned long long)loop->ticks(), (unsigned long long)loop->overruns(),
-               (unsigned long long)supervisor->flight_dumps());
+  log::info("stopped after %llu ticks, %llu overruns, %llu flight-recorder dumps",
+            (unsigned long long)loop->ticks(), (unsigned long long)loop->overruns(),
+            (unsigned long long)supervisor->flight_dumps());
   for (std::size_t i = 0; i < loop->device_count(); ++i) {
     const auto& q = loop->link_quality(i);
-    std::fprintf(stderr, "haptic-rt: device \"%s\": link quality %.4f fresh (%llu/%llu ticks), longest miss run %u ticks\n",
-                 loop->device_name(i), q.fresh_share(), (unsigned long long)q.fresh_ticks, (unsigned long long)q.ticks,
-                 q.longest_miss_run);
+    log::info("device \"%s\": link quality %.4f fresh (%llu/%llu ticks), longest miss run %u ticks",
+              loop->device_name(i), q.fresh_share(), (unsigned long long)q.fresh_ticks, (unsigned long long)q.ticks,
+              q.longest_miss_run);
   }
   g_loop = nullptr;
   return 0;

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/shm/channel.hpp"
 
 using namespace hapfluid;
@@ -78,12 +79,12 @@ int main(int argc, char** argv) {
     writer = shm::LatestWriter::create(shm::segment_name(prefix, shm::ChannelKind::sim_samples),
                                        shm::ChannelKind::sim_samples, sizeof(shm::SimSample));
   } catch (const shm::ShmError& e) {
-    std::fprintf(stderr, "haptic-sim-standin: %s\n", e.what());
+    log::error("%s", e.what());
     return 2;
   }
   shm::LatestReader device_states;
-  std::fprintf(stderr, "haptic-sim-standin: publishing %s wrench at %g Hz to /%s.sim_samples\n", pattern.c_str(),
-               rate_hz, prefix.c_str());
+  log::info("publishing %s wrench at %g Hz to /%s.sim_samples", pattern.c_str(),
+            rate_hz, prefix.c_str());
 
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -141,8 +142,8 @@ int main(int argc, char** argv) {
     if (switching) {
       switched = true;
       if (!stalled)
-        std::fprintf(stderr, "haptic-sim-standin: SIGUSR1: publishing %s wrench from publish_ns %llu\n", pattern.c_str(),
-                     static_cast<unsigned long long>(sample->publish_ns));
+        log::info("SIGUSR1: publishing %s wrench from publish_ns %llu", pattern.c_str(),
+                  static_cast<unsigned long long>(sample->publish_ns));
     }
     next += period_ns;
     timespec ts{static_cast<time_t>(next / 1'000'000'000ull), static_cast<long>(next % 1'000'000'000ull)};
@@ -150,6 +151,6 @@ int main(int argc, char** argv) {
     }  // (SIGUSR1 must not publish early)
   }
   writer.close();
-  std::fprintf(stderr, "haptic-sim-standin: stopped\n");
+  log::info("stopped");
   return 0;
 }

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "hapfluid/config/command_line.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/rt/trace_csv.hpp"
 #include "hapfluid/shm/channel.hpp"
 
@@ -49,7 +50,7 @@ int main(int argc, char** argv) {
       break;
     } catch (const shm::ShmError& e) {
       if (g_stop || std::chrono::steady_clock::now() > give_up) {
-        std::fprintf(stderr, "haptic-trace: %s\n", e.what());
+        log::error("%s", e.what());
         return 2;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -57,7 +58,7 @@ int main(int argc, char** argv) {
   }
   std::FILE* out = std::fopen(out_path.c_str(), "w");
   if (!out) {
-    std::fprintf(stderr, "haptic-trace: --out %s: cannot create the file\n", out_path.c_str());
+    log::error("--out %s: cannot create the file", out_path.c_str());
     return 2;
   }
   rt::write_trace_header(out, shm::kMaxDevices);
@@ -81,14 +82,14 @@ int main(int argc, char** argv) {
       shm::WriterStatus s = ring.check_liveness(now, 0);
       if (s != shm::WriterStatus::live) {
         while (reader.next(record)) rt::write_trace_row(out, record, shm::kMaxDevices), ++rows;
-        std::fprintf(stderr, "haptic-trace: trace ring %s\n", shm::to_string(s));
+        log::notice("trace ring %s", shm::to_string(s));
         break;
       }
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   std::fclose(out);
-  std::fprintf(stderr, "haptic-trace: wrote %llu records to %s, %llu lost (reader too slow)\n",
-               (unsigned long long)rows, out_path.c_str(), (unsigned long long)reader.lost());
+  log::info("wrote %llu records to %s, %llu lost (reader too slow)",
+            (unsigned long long)rows, out_path.c_str(), (unsigned long long)reader.lost());
   return 0;
 }

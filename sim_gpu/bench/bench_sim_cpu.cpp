@@ -18,6 +18,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
@@ -65,12 +66,12 @@ double measure(const std::string& sweep, const config::Scene& scene, int threads
        {"density_iterations_per_step", per_step(it1.density_iterations, it0.density_iterations)},
        {"divergence_iterations_per_step", per_step(it1.divergence_iterations, it0.divergence_iterations)},
        {"viscosity_iterations_per_step", per_step(it1.viscosity_iterations, it0.viscosity_iterations)}}));
-  std::fprintf(stderr, "bench_sim_cpu: %-5s %s %6zu particles (%zu body), %d thread(s): %7.2f ms/step, %6.1f steps/s "
-               "[grid %.2f, density %.2f, pressure %.2f, forces %.2f, bodies %.2f, integrate %.2f ms]\n",
-               sweep.c_str(), solver.method(), fluid + body, body, threads, ms, steps / wall,
-               phase(after.neighbour_search_s, before.neighbour_search_s), phase(after.density_s, before.density_s),
-               phase(after.pressure_s, before.pressure_s), phase(after.forces_s, before.forces_s),
-               phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s));
+  log::info("%-5s %s %6zu particles (%zu body), %d thread(s): %7.2f ms/step, %6.1f steps/s "
+            "[grid %.2f, density %.2f, pressure %.2f, forces %.2f, bodies %.2f, integrate %.2f ms]",
+            sweep.c_str(), solver.method(), fluid + body, body, threads, ms, steps / wall,
+            phase(after.neighbour_search_s, before.neighbour_search_s), phase(after.density_s, before.density_s),
+            phase(after.pressure_s, before.pressure_s), phase(after.forces_s, before.forces_s),
+            phase(after.bodies_s, before.bodies_s), phase(after.integration_s, before.integration_s));
   return ms;
 }
 
@@ -83,7 +84,7 @@ void measure_pool(const std::filesystem::path& dir, int n, bool dfsph, bool scal
   records.push_back(config::bench_record(
       "bench_sim_cpu", {{"backend", "cpu"}, {"sweep", "scaling"}, {"solver", solver}, {"particles_requested", n}},
       {{"ms_per_step_1_thread", ms_1}, {"ms_per_step_2_threads", ms_2}, {"speedup_2_threads", ms_1 / ms_2}}));
-  std::fprintf(stderr, "bench_sim_cpu: %s pool of %d, 2 threads are %.2fx one\n", solver, n, ms_1 / ms_2);
+  log::info("%s pool of %d, 2 threads are %.2fx one", solver, n, ms_1 / ms_2);
 }
 
 }  // namespace
@@ -126,7 +127,7 @@ int main(int argc, char** argv) {
       measure("fig6c", matched_scene(dir, total, bodies), 2, steps, {{"bodies", k}});
     }
   } catch (const std::exception& e) {
-    std::cerr << "bench_sim_cpu: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     std::filesystem::remove_all(dir);
     return 1;
   }
@@ -134,7 +135,7 @@ int main(int argc, char** argv) {
   try {
     config::write_json_atomically(out, records);
   } catch (const std::exception& e) {
-    std::cerr << "bench_sim_cpu: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     return 1;
   }
   return 0;

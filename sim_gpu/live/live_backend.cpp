@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "hapfluid/config/log.hpp"
 #ifdef HAPFLUID_WITH_VULKAN
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 #endif
@@ -94,7 +95,7 @@ std::unique_ptr<LiveSolver> make_live_solver(const SimulationModel& model, const
   );
 }
 
-LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& o, std::ostream& log) {
+LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& o) {
   if (o.backend != "cpu" && o.backend != "vulkan" && o.backend != "auto")
     throw BackendUnavailable("--backend " + o.backend + ": expected cpu, vulkan or auto");
   const SimulationModel model = build_model(scene);
@@ -109,7 +110,7 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
 #ifndef HAPFLUID_WITH_VULKAN
   if (o.backend == "vulkan")
     throw BackendUnavailable("--backend vulkan: this haptic-sim was built without the Vulkan backend (sim_gpu/vulkan)");
-  log << "haptic-sim: notice: --backend auto: built without the Vulkan backend; running on the cpu backend\n";
+  log::Line(log::Level::notice) << "notice: --backend auto: built without the Vulkan backend; running on the cpu backend";
   r.solver = make_cpu();
   r.reason = "auto: built without the Vulkan backend";
   return r;
@@ -130,7 +131,7 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   if (model.params.solver != config::PressureSolver::wcsph) {
     const std::string why = std::string("the Vulkan backend runs fluid.solver = \"wcsph\" only, this scene uses \"") +
                             config::to_string(model.params.solver) + "\"";
-    log << "haptic-sim: notice: --backend auto: " << why << "; running on the cpu backend\n";
+    log::Line(log::Level::notice) << "notice: --backend auto: " << why << "; running on the cpu backend";
     r.solver = make_cpu();
     r.reason = "auto: " + why;
     return r;
@@ -141,8 +142,8 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   } catch (const std::invalid_argument& e) {
     throw BackendUnavailable(std::string("--vk-device: ") + e.what());
   } catch (const std::exception& e) {  // no loader, no ICD, no device, or a scene beyond its limits
-    log << "haptic-sim: notice: --backend auto: no usable Vulkan device (" << e.what()
-        << "); running on the cpu backend\n";
+    log::Line(log::Level::notice) << "notice: --backend auto: no usable Vulkan device (" << e.what()
+                                  << "); running on the cpu backend";
     r.solver = make_cpu();
     r.reason = std::string("auto: no usable Vulkan device: ") + e.what();
     return r;
@@ -151,15 +152,15 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   try {
     r.vulkan_probe = probe_backend(*probe, o.probe_simulated_s, o.probe_wall_s);
   } catch (const std::exception& e) {  // e.g. a lost device: as unusable as a missing one
-    log << "haptic-sim: notice: --backend auto: Vulkan on " << vulkan_name << " failed its probe (" << e.what()
-        << "); running on the cpu backend\n";
+    log::Line(log::Level::notice) << "notice: --backend auto: Vulkan on " << vulkan_name << " failed its probe (" << e.what()
+                                  << "); running on the cpu backend";
     r.solver = make_cpu();
     r.reason = "auto: Vulkan on " + vulkan_name + " failed its probe: " + e.what();
     return r;
   }
   probe.reset();
-  log << "haptic-sim: --backend auto: probe on Vulkan (" << vulkan_name << "): " << probe_words(r.vulkan_probe)
-      << " on this scene\n";
+  log::Line(log::Level::info) << "--backend auto: probe on Vulkan (" << vulkan_name << "): " << probe_words(r.vulkan_probe)
+                              << " on this scene";
   if (r.vulkan_probe.real_time_factor() >= o.vulkan_min_real_time_factor) {
     r.solver = make_vulkan(model, o);
     r.reason = "auto: Vulkan keeps up (probe real-time factor " + fixed(r.vulkan_probe.real_time_factor(), 2) + " >= " +
@@ -173,11 +174,11 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   const bool cpu_faster = r.cpu_probe.real_time_factor() > r.vulkan_probe.real_time_factor();
   const std::string both = "Vulkan on " + vulkan_name + ": " + probe_words(r.vulkan_probe) + "; cpu backend (" +
                            std::to_string(o.threads) + (o.threads == 1 ? " thread): " : " threads): ") + probe_words(r.cpu_probe);
-  log << "haptic-sim: NOTICE: --backend auto: Vulkan (" << vulkan_name << ") cannot keep up with the wall clock on this "
-      << "scene (probe real-time factor " << fixed(r.vulkan_probe.real_time_factor(), 2) << " < "
-      << fixed(o.vulkan_min_real_time_factor, 2) << "); " << both << " => running on the "
-      << (cpu_faster ? "cpu backend" : "Vulkan backend (the cpu backend is no faster)")
-      << " (--backend vulkan|cpu forces one)\n";
+  log::Line(log::Level::notice) << "NOTICE: --backend auto: Vulkan (" << vulkan_name << ") cannot keep up with the wall clock on this "
+                                << "scene (probe real-time factor " << fixed(r.vulkan_probe.real_time_factor(), 2) << " < "
+                                << fixed(o.vulkan_min_real_time_factor, 2) << "); " << both << " => running on the "
+                                << (cpu_faster ? "cpu backend" : "Vulkan backend (the cpu backend is no faster)")
+                                << " (--backend vulkan|cpu forces one)";
   r.solver = cpu_faster ? std::unique_ptr<LiveSolver>(make_cpu()) : make_vulkan(model, o);
   r.reason = "auto: Vulkan on " + vulkan_name + " cannot keep up (probe real-time factor " +
              fixed(r.vulkan_probe.real_time_factor(), 2) + " < " + fixed(o.vulkan_min_real_time_factor, 2) + ", cpu " +

@@ -23,7 +23,6 @@
 #pragma once
 
 #include <memory>
-#include <ostream>
 #include <stdexcept>
 #include <string>
 
@@ -70,9 +69,9 @@ class BackendUnavailable : public std::runtime_error {
 std::unique_ptr<LiveSolver> make_live_solver(const SimulationModel& model, const std::string& backend,
                                              const LiveBackendOptions& options);
 
-// Builds the model of `scene` and the solver chosen by the rule above. Notices go to `log`.
+// Builds the model of `scene` and the solver chosen by the rule above. Notices go to the log.
 // Throws BackendUnavailable, or std::runtime_error for a scene no backend can run.
-LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& options, std::ostream& log);
+LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOptions& options);
 
 // Steps `solver` (devices as set) for up to `simulated_s` of simulated time or `wall_s` of wall
 // time, after a few untimed warm-up steps (first submissions, caches).

@@ -18,6 +18,7 @@
 
 #include "hapfluid/config/build_id.hpp"
 #include "hapfluid/config/errors.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/rig.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/rt/sd_notify.hpp"
@@ -80,13 +81,13 @@ class DeviceInput {
   explicit DeviceInput(std::string name) : name_(std::move(name)) {}
 
   // Returns the newest record when it is newer than the last one returned.
-  const shm::DeviceStatesRecord* poll(std::uint64_t now, std::ostream& log) {
+  const shm::DeviceStatesRecord* poll(std::uint64_t now) {
     if (now >= next_check_ns_) {
       next_check_ns_ = now + 250'000'000ull;
       if (reader_.valid()) {
         const shm::WriterStatus s = reader_.check_liveness(now, 500'000'000ull);
         if (s != shm::WriterStatus::live) {
-          log << "haptic-sim: device states " << shm::to_string(s) << " (haptic-rt stopped?): devices hold their last pose\n";
+          log::Line(log::Level::notice) << "device states " << shm::to_string(s) << " (haptic-rt stopped?): devices hold their last pose";
           reader_ = shm::LatestReader();
           live_ = false;
         }
@@ -94,10 +95,10 @@ class DeviceInput {
       if (!reader_.valid()) {
         try {
           reader_ = shm::LatestReader::attach(name_, shm::ChannelKind::device_states, sizeof(shm::DeviceStatesRecord));
-          log << "haptic-sim: attached to " << name_ << " (haptic-rt pid " << reader_.segment().layout().writer_pid << ")\n";
+          log::Line(log::Level::info) << "attached to " << name_ << " (haptic-rt pid " << reader_.segment().layout().writer_pid << ")";
           last_generation_ = 0;
         } catch (const shm::ShmError& e) {
-          if (!attach_error_said_) log << "haptic-sim: waiting for haptic-rt: " << e.what() << "\n";
+          if (!attach_error_said_) log::Line(log::Level::warning) << "waiting for haptic-rt: " << e.what();
           attach_error_said_ = true;
         }
       }
@@ -198,13 +199,13 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
 
 }  // namespace
 
-int run_live(const LiveOptions& o, std::ostream& log) {
+int run_live(const LiveOptions& o) {
   if (o.threads < 1 || o.threads > kMaxWorkerThreads) {
-    log << "haptic-sim: --threads " << o.threads << ": must be 1.." << kMaxWorkerThreads << "\n";
+    log::Line(log::Level::error) << "--threads " << o.threads << ": must be 1.." << kMaxWorkerThreads;
     return 2;
   }
   if (o.export_every_s > 0 && o.out.empty()) {
-    log << "haptic-sim: --export-every " << o.export_every_s << ": needs --out DIR (frames go to DIR/particles/)\n";
+    log::Line(log::Level::error) << "--export-every " << o.export_every_s << ": needs --out DIR (frames go to DIR/particles/)";
     return 2;
   }
   std::string prefix = o.shm_prefix, group;
@@ -217,8 +218,9 @@ int run_live(const LiveOptions& o, std::ostream& log) {
     }
     scene = config::load_scene(o.scene);
   } catch (const config::ConfigError& e) {
-    log << "haptic-sim: invalid configuration:\n";
-    for (const auto& p : e.problems()) log << "  " << p.to_string() << "\n";
+    log::Line line(log::Level::error);
+    line << "invalid configuration:";
+    for (const auto& p : e.problems()) line << "\n  " << p.to_string();
     return 2;
   }
   if (prefix.empty()) prefix = "hapfluid";
@@ -230,17 +232,17 @@ int run_live(const LiveOptions& o, std::ostream& log) {
     bo.backend = o.backend;
     bo.vulkan_device = o.vulkan_device;
     bo.threads = o.threads;
-    backend = choose_live_backend(scene, bo, log);
+    backend = choose_live_backend(scene, bo);
   } catch (const std::exception& e) {
-    log << "haptic-sim: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     return 2;
   }
   LiveSolver* solver = backend.solver.get();
   const SimulationModel& m = solver->model();
   const std::size_t fluid_count = m.fluid.size();
   if (m.bodies.size() > std::size_t(shm::kMaxBodies))
-    log << "haptic-sim: note: the scene has " << m.bodies.size() << " bodies; sim_samples and particle frames carry the first "
-        << shm::kMaxBodies << "\n";
+    log::Line(log::Level::notice) << "note: the scene has " << m.bodies.size() << " bodies; sim_samples and particle frames carry the first "
+                                  << shm::kMaxBodies;
 
   shm::WriterOptions wo;
   wo.group = group;
@@ -252,7 +254,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
                                                  shm::ChannelKind::particles,
                                                  shm::particle_frame_bytes(static_cast<std::uint32_t>(fluid_count)), 3, wo);
   } catch (const shm::ShmError& e) {
-    log << "haptic-sim: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     return 2;
   }
 
@@ -272,16 +274,16 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       if (o.export_every_s > 0) vtk_frames.emplace(o.out / "particles", o.export_every_s);
     }
   } catch (const std::exception& e) {
-    log << "haptic-sim: --out " << o.out.string() << ": " << e.what() << "\n";
+    log::Line(log::Level::error) << "--out " << o.out.string() << ": " << e.what();
     return 2;
   }
 
   const ComputeDevice device = solver->device();
-  log << "haptic-sim: live: backend " << solver->backend() << " on " << device.name
-      << (device.driver.empty() ? "" : " (" + device.type + ", " + device.driver + ")") << " [" << backend.reason
-      << "]; scene \"" << m.scene_name << "\", " << fluid_count << " fluid particles, " << m.bodies.size()
-      << " bodies, " << m.devices.size() << " scene devices; shm /" << prefix
-      << ".{sim_samples,particles} (reads /" << prefix << ".device_states)\n";
+  log::Line(log::Level::info) << "live: backend " << solver->backend() << " on " << device.name
+                              << (device.driver.empty() ? "" : " (" + device.type + ", " + device.driver + ")") << " [" << backend.reason
+                              << "]; scene \"" << m.scene_name << "\", " << fluid_count << " fluid particles, " << m.bodies.size()
+                              << " bodies, " << m.devices.size() << " scene devices; shm /" << prefix
+                              << ".{sim_samples,particles} (reads /" << prefix << ".device_states)";
 
   // Buffers reused every step: nothing below allocates per step except the CSV rows.
   auto sample = std::make_unique<shm::SimSample>();
@@ -353,7 +355,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       vtk_frames->write(m, solver->time_s());
     } catch (const std::exception& e) {
       c.vtk_error = e.what();
-      log << "haptic-sim: VTK export stopped after " << c.vtk_frames << " frames: " << e.what() << "\n";
+      log::Line(log::Level::warning) << "VTK export stopped after " << c.vtk_frames << " frames: " << e.what();
       vtk_frames.reset();
       return;
     }
@@ -388,11 +390,11 @@ int run_live(const LiveOptions& o, std::ostream& log) {
           const double wall = std::max(double(now - start_ns) * 1e-9, 1e-9);
           char line[256];
           std::snprintf(line, sizeof line,
-                        "haptic-sim: WARNING cannot keep up with the wall clock (%.0f ms behind at t = %.2f s, "
+                        "WARNING cannot keep up with the wall clock (%.0f ms behind at t = %.2f s, "
                         "%.0f steps/s): the fluid runs SLOWER than real time; real-time factor so far %.2f, "
-                        "reported in status lines and stats.json\n",
+                        "reported in status lines and stats.json",
                         lag_s * 1e3, solver->time_s(), double(solver->steps()) / wall, solver->time_s() / wall);
-          log << line << std::flush;
+          log::write(log::Level::warning, line);
         }
         ++c.lag_events;
         c.dropped_backlog_s += lag_s;
@@ -400,7 +402,7 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       }
 
       // Device poses: the newest device_states record, matched by name (live_runner.hpp).
-      if (const shm::DeviceStatesRecord* r = input.poll(now, log)) {
+      if (const shm::DeviceStatesRecord* r = input.poll(now)) {
         devices = *r;
         have_devices = true;
         ++c.device_records;
@@ -416,11 +418,11 @@ int run_live(const LiveOptions& o, std::ostream& log) {
           const std::string mapping = d >= 0 ? name + " -> " + m.devices[d].name : name + " -> (none)";
           if (device_map[i] != mapping) {
             device_map[i] = mapping;
-            if (d >= 0) log << "haptic-sim: rig device \"" << name << "\" drives scene device \"" << m.devices[d].name << "\"\n";
+            if (d >= 0) log::Line(log::Level::info) << "rig device \"" << name << "\" drives scene device \"" << m.devices[d].name << "\"";
             else if (!unmatched_said[i])
-              log << "haptic-sim: rig device \"" << name
-                  << "\" drives no scene device (no scene device has rig_device = \"" << name
-                  << "\" or that name): it feels no fluid\n";
+              log::Line(log::Level::warning) << "rig device \"" << name
+                                             << "\" drives no scene device (no scene device has rig_device = \"" << name
+                                             << "\" or that name): it feels no fluid";
             unmatched_said[i] = d < 0;
           }
         }
@@ -454,11 +456,11 @@ int run_live(const LiveOptions& o, std::ostream& log) {
       if (const std::uint64_t clamped = solver->clamped_particle_count(); clamped > 0 && c.clamped_reported == 0) {
         char line[320];
         std::snprintf(line, sizeof line,
-                      "haptic-sim: WARNING %llu fluid particle(s) reached a wall at t = %.3f s and were put back by "
+                      "WARNING %llu fluid particle(s) reached a wall at t = %.3f s and were put back by "
                       "the last-resort clamp: the fluid moves faster than this step resolves; counted in status lines "
-                      "and stats.json (clamped_particle_events)\n",
+                      "and stats.json (clamped_particle_events)",
                       (unsigned long long)clamped, solver->time_s());
-        log << line << std::flush;
+        log::write(log::Level::warning, line);
         c.clamped_reported = clamped;
       }
 
@@ -530,13 +532,13 @@ int run_live(const LiveOptions& o, std::ostream& log) {
         const double window = std::max(double(now - status_wall_ns) * 1e-9, 1e-9);
         char line[260];
         std::snprintf(line, sizeof line,
-                      "haptic-sim: t = %.2f s, %.0f steps/s, real-time factor %.2f, %d thread(s), %llu samples, "
-                      "%llu frames%s%s\n",
+                      "t = %.2f s, %.0f steps/s, real-time factor %.2f, %d thread(s), %llu samples, "
+                      "%llu frames%s%s",
                       solver->time_s(), double(solver->steps() - status_steps) / window,
                       (solver->time_s() - status_sim_s) / window, solver->active_threads(), (unsigned long long)c.samples,
                       (unsigned long long)c.particle_frames, clamp_note(solver->clamped_particle_count()).c_str(),
                       input.live() ? "" : ", no haptic-rt");
-        log << line << std::flush;
+        log::write(log::Level::info, line);
         if (notifier.active()) notifier.send(std::string("STATUS=") + line);
         status_steps = solver->steps(), status_sim_s = solver->time_s(), status_wall_ns = now;
         next_status_ns = now + static_cast<std::uint64_t>(o.status_every_s * 1e9);
@@ -562,15 +564,15 @@ int run_live(const LiveOptions& o, std::ostream& log) {
   }
   char line[360];
   std::snprintf(line, sizeof line,
-                "haptic-sim: live run %s on the %s backend: %llu steps in %.2f s (%.0f steps/s), %.2f s simulated, "
-                "real-time factor %.3f%s%s\n",
+                "live run %s on the %s backend: %llu steps in %.2f s (%.0f steps/s), %.2f s simulated, "
+                "real-time factor %.3f%s%s",
                 error.empty() ? "stopped" : "FAILED", solver->backend(), (unsigned long long)solver->steps(), wall_s,
                 double(solver->steps()) / std::max(wall_s, 1e-9), solver->time_s(), solver->time_s() / std::max(wall_s, 1e-9),
                 c.lag_events ? " (could NOT keep up with the wall clock)" : "",
                 clamp_note(solver->clamped_particle_count()).c_str());
-  log << line;
+  log::write(error.empty() ? log::Level::info : log::Level::error, line);
   if (!error.empty()) {
-    log << "haptic-sim: error: " << error << "\n";
+    log::Line(log::Level::error) << "error: " << error;
     return 1;
   }
   return 0;

@@ -22,7 +22,6 @@
 #pragma once
 
 #include <filesystem>
-#include <ostream>
 #include <string>
 
 namespace hapfluid::sim {
@@ -43,6 +42,6 @@ struct LiveOptions {
 
 // Runs until SIGINT/SIGTERM (handlers installed here) or the duration. Returns the process exit
 // code: 0 clean stop, 1 simulation error (non-finite state), 2 bad options/scene/shm.
-int run_live(const LiveOptions& options, std::ostream& log);
+int run_live(const LiveOptions& options);
 
 }  // namespace hapfluid::sim

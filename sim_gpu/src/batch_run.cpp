@@ -6,6 +6,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim/thread_pool.hpp"
@@ -44,7 +45,7 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
 BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   BatchOptions o = options;
   if (o.backend == "auto") {
-    progress << "haptic-sim: --backend auto: no GPU backend in this build, using the cpu backend\n";
+    log::notice("--backend auto: no GPU backend in this build, using the cpu backend");
     o.backend = "cpu";
   }
   if (o.backend != "cpu")
@@ -102,10 +103,14 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
       const double wall = elapsed();
       if (o.progress_line || k + 1 == frames || (k + 1) % std::max(1, frames / 10) == 0) {
         char line[160];
-        std::snprintf(line, sizeof line, "haptic-sim: t = %.3f / %.3f s, %llu steps, %.1f steps/s, real-time factor %.3f",
+        std::snprintf(line, sizeof line, "t = %.3f / %.3f s, %llu steps, %.1f steps/s, real-time factor %.3f",
                       t1, duration, static_cast<unsigned long long>(r.steps), r.steps / std::max(wall, 1e-9),
                       t1 / std::max(wall, 1e-9));
-        progress << (o.progress_line ? "\r" : "") << line << (o.progress_line && k + 1 < frames ? "" : "\n") << std::flush;
+        // A terminal gets one line redrawn in place; a log, a line every tenth of the run.
+        if (o.progress_line)
+          progress << "\r" << line << (k + 1 < frames ? "" : "\n") << std::flush;
+        else
+          log::info("%s", line);
       }
     }
     bodies_csv.finish();

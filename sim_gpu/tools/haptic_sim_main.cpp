@@ -11,6 +11,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/errors.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/sim/batch_run.hpp"
 #include "hapfluid/sim/command_line_numbers.hpp"
 #include "hapfluid/sim/thread_pool.hpp"
@@ -22,6 +23,7 @@
 namespace {
 
 namespace config = hapfluid::config;
+namespace log = hapfluid::log;
 namespace sim = hapfluid::sim;
 
 int run_batch_mode(const sim::BatchOptions& o, bool vk_validation, const std::string& vk_device) {
@@ -35,15 +37,16 @@ int run_batch_mode(const sim::BatchOptions& o, bool vk_validation, const std::st
     (void)vk_validation, (void)vk_device;
     const auto r = sim::run_batch(o, std::cerr);
 #endif
-    std::cerr << "haptic-sim: done: " << r.steps << " steps, " << r.simulated_time_s << " s simulated in " << r.wall_time_s
-              << " s; outputs in " << o.out.string() << "\n";
+    log::Line(log::Level::info) << "done: " << r.steps << " steps, " << r.simulated_time_s << " s simulated in " << r.wall_time_s
+                                << " s; outputs in " << o.out.string();
     return 0;
   } catch (const config::ConfigError& e) {
-    std::cerr << "haptic-sim: invalid scene:\n";
-    for (const auto& p : e.problems()) std::cerr << "  " << p.to_string() << "\n";
+    log::Line line(log::Level::error);
+    line << "invalid scene:";
+    for (const auto& p : e.problems()) line << "\n  " << p.to_string();
     return 1;
   } catch (const std::exception& e) {
-    std::cerr << "haptic-sim: error: " << e.what() << "\n";
+    log::Line(log::Level::error) << "error: " << e.what();
     return 1;
   }
 }
@@ -110,7 +113,7 @@ int main(int argc, char** argv) {
 
   if (live_mode) {
     if (vk_validation) {
-      std::cerr << "haptic-sim: --vk-validation is a batch-mode option (haptic-sim --help for usage)\n";
+      log::Line(log::Level::error) << "--vk-validation is a batch-mode option (haptic-sim --help for usage)";
       return config::kUsageExitCode;
     }
     live.scene = scene;
@@ -120,14 +123,14 @@ int main(int argc, char** argv) {
     live.duration_s = duration_s;
     live.threads = threads;
     if (export_every_s >= 0) live.export_every_s = export_every_s;
-    return sim::run_live(live, std::cerr);
+    return sim::run_live(live);
   }
   if (out.empty()) {
-    std::cerr << "haptic-sim: --out is required in batch mode (haptic-sim --help for usage)\n";
+    log::Line(log::Level::error) << "--out is required in batch mode (haptic-sim --help for usage)";
     return config::kUsageExitCode;
   }
   if (app.count("--duration") > 0 && duration_s == 0) {
-    std::cerr << "haptic-sim: --duration: must be > 0 s in batch mode, not \"0\" (haptic-sim --help for usage)\n";
+    log::Line(log::Level::error) << "--duration: must be > 0 s in batch mode, not \"0\" (haptic-sim --help for usage)";
     return config::kUsageExitCode;
   }
   batch.scene = scene;

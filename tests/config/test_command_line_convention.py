@@ -47,6 +47,16 @@ def test_a_usage_error_is_one_line_naming_the_option_with_exit_2(binary, tool):
     assert len(lines) == 1 and lines[0].startswith(f"{tool}: ") and option in lines[0], result.stderr
 
 
+@pytest.mark.parametrize("tool", sorted(TOOLS))
+def test_every_tool_takes_a_log_level_and_names_the_levels_when_it_is_wrong(binary, tool):
+    assert "--log-level" in run(binary, tool, "--help").stdout
+    result = run(binary, tool, "--log-level", "loud", *TOOLS[tool][0])
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"{tool}: ") and "--log-level" in lines[0], result.stderr
+    assert "error, warning, notice, info, debug" in lines[0] and '"loud"' in lines[0]
+
+
 # tool -> an option with a valid value, given again before the usage error
 REPEATED = {
     "haptic-config": ["check", "--rig", "config/rigs/fake_single.toml"],

@@ -179,6 +179,59 @@ def test_sd_notify_ready_and_watchdog_follow_loop_progress(binary, tmp_path):
     assert messages[-1] == "STOPPING=1"
 
 
+def _run_logging_to_file(binary, tmp_path, name, args, journal, env_extra=None):
+    """haptic-rt with stderr in a file; `journal`: as systemd starts a service (JOURNAL_STREAM
+    names that stream's device and inode). Returns (exit code, stderr lines)."""
+    err = tmp_path / f"{name}.stderr"
+    with open(err, "w") as f:
+        env = dict(os.environ, **(env_extra or {}))
+        env.pop("JOURNAL_STREAM", None)
+        if journal:
+            st = os.fstat(f.fileno())
+            env["JOURNAL_STREAM"] = f"{st.st_dev}:{st.st_ino}"
+        result = subprocess.run([str(binary("haptic-rt")), *args], stderr=f, env=env, timeout=30)
+    return result.returncode, err.read_text().splitlines()
+
+
+def test_under_systemd_every_line_carries_its_journal_priority(binary, tmp_path):
+    args = ["--rig", str(RIGS / "one_arm.toml"), "--simulated-devices", "--shm-prefix", unique_prefix("journal"),
+            "--duration", "0.3"]
+    code, lines = _run_logging_to_file(binary, tmp_path, "journal", args, journal=True)
+    assert code == 0, lines
+    assert lines and all(re.match(r"<[3-7]>", line) for line in lines), lines
+    assert any(line.startswith("<6>haptic-rt: rig ") for line in lines), lines
+    # A message of several lines (the safety limits under their device): the priority on each.
+    limits = next(k for k, line in enumerate(lines) if "safety limits:" in line)
+    assert lines[limits + 1].startswith("<6>") and not lines[limits + 1].startswith("<6>haptic-rt: ")
+    # An error is at priority 3, so `journalctl -p err` shows it.
+    bad = tmp_path / "bad.toml"
+    bad.write_text((RIGS / "one_arm.toml").read_text().replace("priority = 80", "priority = 120"))
+    code, lines = _run_logging_to_file(binary, tmp_path, "bad", ["--rig", str(bad), "--simulated-devices"], journal=True)
+    assert code == 2 and lines and lines[0].startswith("<3>haptic-rt: ") and "rt.priority = 120" in lines[0], lines
+    # stderr that is not the journal's stream (a file, a terminal): no prefixes.
+    code, lines = _run_logging_to_file(binary, tmp_path, "file", args, journal=False)
+    assert code == 0 and lines and all(line.startswith(("haptic-rt: ", " ")) for line in lines), lines
+
+
+def test_the_log_level_drops_what_is_below_it(binary, tmp_path):
+    args = ["--rig", str(RIGS / "one_arm.toml"), "--simulated-devices", "--duration", "0.3"]
+    code, everything = _run_logging_to_file(binary, tmp_path, "info", [*args, "--shm-prefix", unique_prefix("lvl")],
+                                            journal=True)
+    assert code == 0 and any(line.startswith("<6>") for line in everything)
+    for how, extra, env in (("option", ["--log-level", "warning"], None),
+                            ("environment", [], {"HAPFLUID_LOG_LEVEL": "warning"}),
+                            ("option over environment", ["--log-level", "warning"], {"HAPFLUID_LOG_LEVEL": "debug"})):
+        code, lines = _run_logging_to_file(binary, tmp_path, "warn", [*args, "--shm-prefix", unique_prefix("lvl"), *extra],
+                                           journal=True, env_extra=env)
+        assert code == 0, (how, lines)
+        assert all(line[:3] in ("<3>", "<4>") for line in lines), (how, lines)
+    # A level the environment gets wrong is said, not silently ignored.
+    code, lines = _run_logging_to_file(binary, tmp_path, "loud", [*args, "--shm-prefix", unique_prefix("lvl")],
+                                       journal=False, env_extra={"HAPFLUID_LOG_LEVEL": "loud"})
+    assert code == 0 and lines[0] == ('haptic-rt: HAPFLUID_LOG_LEVEL "loud" is not a level (error, warning, notice, '
+                                      'info, debug); logging at info'), lines
+
+
 def _without_rt_rights(args):
     """Runs args without CAP_SYS_NICE/CAP_IPC_LOCK and with RLIMIT_RTPRIO = 0, RLIMIT_MEMLOCK = 64 KiB."""
     inner = "ulimit -r 0; ulimit -l 64; exec " + " ".join(f"'{a}'" for a in args)

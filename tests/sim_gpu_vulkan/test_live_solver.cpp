@@ -10,6 +10,7 @@
 #include <sstream>
 #include <string>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "live_backend.hpp"
 
@@ -89,30 +90,30 @@ TEST(LiveSolver, VulkanFluidComesBackOnlyWhenTheLoopSyncs) {
 }
 
 TEST(LiveBackend, CpuRequestedRunsTheCpuBackendWithoutAProbe) {
-  std::ostringstream log;
+  hapfluid::log::Capture log;
   hs::LiveBackendOptions options;
   options.backend = "cpu";
   options.threads = 2;
-  const hs::LiveBackend b = hs::choose_live_backend(load(kSpoon), options, log);
+  const hs::LiveBackend b = hs::choose_live_backend(load(kSpoon), options);
   EXPECT_STREQ(b.solver->backend(), "cpu");
   EXPECT_EQ(b.solver->threads(), 2);
   EXPECT_EQ(b.solver->device().name, "2 CPU threads");
   EXPECT_FALSE(b.vulkan_probe.ran);
   EXPECT_FALSE(b.cpu_probe.ran);
   EXPECT_EQ(b.solver->time_s(), 0.0);
-  EXPECT_TRUE(log.str().empty()) << log.str();
+  EXPECT_TRUE(log.text().empty()) << log.text();
 }
 
 TEST(LiveBackend, AutoStartsTheChosenSolverAtTimeZeroAfterItsProbe) {
   // The probe runs on a throw-away solver: the live run's simulated time starts at 0 whatever
   // was probed, and the probe measured real steps.
-  std::ostringstream log;
+  hapfluid::log::Capture log;
   hs::LiveBackendOptions options;
   options.probe_simulated_s = 0.02;
-  const hs::LiveBackend b = hs::choose_live_backend(load(kSpoon), options, log);
+  const hs::LiveBackend b = hs::choose_live_backend(load(kSpoon), options);
   EXPECT_EQ(b.solver->time_s(), 0.0);
   EXPECT_EQ(b.solver->steps(), 0u);
-  ASSERT_TRUE(b.vulkan_probe.ran) << log.str();
+  ASSERT_TRUE(b.vulkan_probe.ran) << log.text();
   EXPECT_GT(b.vulkan_probe.steps, 0u);
   EXPECT_GE(b.vulkan_probe.simulated_s, 0.02);
   // The rule of live_backend.hpp on the measured numbers.
@@ -123,16 +124,16 @@ TEST(LiveBackend, AutoStartsTheChosenSolverAtTimeZeroAfterItsProbe) {
     ASSERT_TRUE(b.cpu_probe.ran);
     const bool cpu_faster = b.cpu_probe.real_time_factor() > b.vulkan_probe.real_time_factor();
     EXPECT_STREQ(b.solver->backend(), cpu_faster ? "cpu" : "vulkan");
-    EXPECT_NE(log.str().find("NOTICE"), std::string::npos) << log.str();
+    EXPECT_NE(log.text().find("NOTICE"), std::string::npos) << log.text();
   }
 }
 
 TEST(LiveBackend, AnUnknownBackendIsNamedWithTheKnownOnes) {
-  std::ostringstream log;
+  hapfluid::log::Capture log;
   hs::LiveBackendOptions options;
   options.backend = "cuda";
   try {
-    hs::choose_live_backend(load(kSpoon), options, log);
+    hs::choose_live_backend(load(kSpoon), options);
     FAIL() << "no error for --backend cuda";
   } catch (const hs::BackendUnavailable& e) {
     EXPECT_NE(std::string(e.what()).find("--backend cuda: expected cpu, vulkan or auto"), std::string::npos) << e.what();

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/rt/trace_csv.hpp"
 #include "hapfluid/safety/flags.hpp"
 
@@ -51,9 +52,9 @@ void Supervisor::stop() {
   if (thread_.joinable()) thread_.join();
   step(/*final=*/true);
   if (trace_file_)
-    std::fprintf(stderr, "haptic-rt: trace: %llu records written to %s, %llu lost (drainer too slow)\n",
-                 (unsigned long long)(trace_reader_.position() - trace_reader_.lost()), options_.trace_path.c_str(),
-                 (unsigned long long)trace_reader_.lost());
+    log::info("trace: %llu records written to %s, %llu lost (drainer too slow)",
+              (unsigned long long)(trace_reader_.position() - trace_reader_.lost()), options_.trace_path.c_str(),
+              (unsigned long long)trace_reader_.lost());
   if (notifier_.active()) notifier_.send("STOPPING=1");
 }
 
@@ -112,9 +113,9 @@ void Supervisor::manage_sim() {
     if (status == shm::WriterStatus::live) return;
     std::string message = std::string("sim_samples: ") + shm::to_string(status);
     if (message != last_sim_message_) {
-      std::fprintf(stderr, "haptic-rt: %s%s\n", message.c_str(),
+      log::warning("%s%s", message.c_str(),
                    status == shm::WriterStatus::replaced ? ": attaching to the new segment"
-                                                         : "; the wrench ramps down while no fresh samples arrive");
+                   : "; the wrench ramps down while no fresh samples arrive");
       last_sim_message_ = message;
     }
     if (status != shm::WriterStatus::replaced) {
@@ -131,8 +132,8 @@ void Supervisor::manage_sim() {
     if (sim_current_ && attachment->reader.segment().inode() == sim_current_->reader.segment().inode()) return;
     attachment->epoch = ++sim_epoch_;
     // The segment's own name: a fallback when another user holds the channel's name.
-    std::fprintf(stderr, "haptic-rt: sim_samples: attached %s (writer pid %d)\n",
-                 attachment->reader.segment().name().c_str(), attachment->reader.segment().layout().writer_pid);
+    log::info("sim_samples: attached %s (writer pid %d)",
+              attachment->reader.segment().name().c_str(), attachment->reader.segment().layout().writer_pid);
     last_sim_message_.clear();
     last_attach_error_.clear();
     loop_.offer_sim(attachment.get());
@@ -141,7 +142,7 @@ void Supervisor::manage_sim() {
   } catch (const shm::ShmError& e) {
     // Said once per cause: a corrupt segment left in /dev/shm fails every check (20 Hz).
     if (last_attach_error_ != e.what()) {
-      std::fprintf(stderr, "haptic-rt: %s\n", e.what());
+      log::warning("%s", e.what());
       last_attach_error_ = e.what();
     }
   }
@@ -156,7 +157,7 @@ void Supervisor::dump_flight_recorder(std::uint64_t fault_tick, std::uint32_t fa
   std::string path = options_.flight_dir + "/flight-tick" + std::to_string(fault_tick) + "-" + names + ".csv";
   std::FILE* out = std::fopen(path.c_str(), "w");
   if (!out) {
-    std::fprintf(stderr, "haptic-rt: flight recorder: cannot write %s\n", path.c_str());
+    log::error("flight recorder: cannot write %s", path.c_str());
     return;
   }
   unsigned devices = static_cast<unsigned>(loop_.device_count());
@@ -175,8 +176,8 @@ void Supervisor::dump_flight_recorder(std::uint64_t fault_tick, std::uint32_t fa
   std::fclose(out);
   ++dumps_;
   last_dump_ns_ = shm::monotonic_ns();
-  std::fprintf(stderr, "haptic-rt: FAULT %s at tick %llu: flight recorder (%llu ticks) dumped to %s\n", names.c_str(),
-               (unsigned long long)fault_tick, (unsigned long long)rows, path.c_str());
+  log::error("FAULT %s at tick %llu: flight recorder (%llu ticks) dumped to %s", names.c_str(),
+             (unsigned long long)fault_tick, (unsigned long long)rows, path.c_str());
 }
 
 void Supervisor::drain_trace() {

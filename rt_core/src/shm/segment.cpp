@@ -13,6 +13,7 @@
 #include <new>
 #include <utility>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/shm/channel.hpp"
 #include "segment_trust.hpp"
 #include "truncation_guard.hpp"
@@ -143,8 +144,8 @@ void remove_own_leftover(const std::string& name) {
       throw ShmError("shm " + name + ": already written by running process pid " + std::to_string(owner) +
                      ": a channel has exactly one writer; stop that process or use another rt.shm.prefix");
     // Said once at start-up, so a crashed predecessor is never silent (its readers re-attach).
-    std::fprintf(stderr, "shm %s: replacing the segment left by pid %d, which is no longer running\n", name.c_str(),
-                 int(owner));
+    log::notice("shm %s: replacing the segment left by pid %d, which is no longer running", name.c_str(),
+                int(owner));
   }
   ::shm_unlink(name.c_str());
 }
@@ -172,9 +173,8 @@ int create_exclusive(const std::string& name, std::string& created) {
     if (fd < 0 && errno != EEXIST) return fd;
   }
   if (fd >= 0)
-    std::fprintf(stderr,
-                 "shm %s: the name is held by %s, which this writer neither trusts nor may remove: writing %s "
-                 "instead (readers find it); remove the impostor with rm /dev/shm%s\n",
+    log::warning("shm %s: the name is held by %s, which this writer neither trusts nor may remove: writing %s "
+                 "instead (readers find it); remove the impostor with rm /dev/shm%s",
                  name.c_str(), holder.c_str(), created.c_str(), name.c_str());
   return fd;
 }

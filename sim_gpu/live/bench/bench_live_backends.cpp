@@ -13,6 +13,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/outputs.hpp"
 #include "live_backend.hpp"
@@ -53,7 +54,7 @@ int main(int argc, char** argv) {
     try {
       scene = config::load_scene(path);
     } catch (const std::exception& e) {
-      std::cerr << "bench_live_backends: " << path.string() << ": " << e.what() << "\n";
+      log::Line(log::Level::error) << "" << path.string() << ": " << e.what();
       return 1;
     }
     const sim::SimulationModel model = sim::build_model(scene);
@@ -65,14 +66,14 @@ int main(int argc, char** argv) {
       try {
         solver = sim::make_live_solver(model, r.backend, options);
       } catch (const std::exception& e) {
-        std::cerr << "bench_live_backends: " << scene.name << " on " << r.backend << ": skipped (" << e.what() << ")\n";
+        log::Line(log::Level::warning) << "" << scene.name << " on " << r.backend << ": skipped (" << e.what() << ")";
         continue;
       }
       const sim::BackendProbe p = sim::probe_backend(*solver, simulated_s, wall_cap_s);
       const double needed = p.simulated_s > 0 ? double(p.steps) / p.simulated_s : 0;
-      std::cerr << "bench_live_backends: " << scene.name << " on " << r.backend << " (" << solver->device().name
-                << "): " << num(p.steps_per_s()) << " steps/s, needs " << num(needed) << ", real-time factor "
-                << num(p.real_time_factor()) << "\n";
+      log::Line(log::Level::info) << "" << scene.name << " on " << r.backend << " (" << solver->device().name
+                                  << "): " << num(p.steps_per_s()) << " steps/s, needs " << num(needed) << ", real-time factor "
+                                  << num(p.real_time_factor());
       records.push_back(config::bench_record(
           "live_backends",
           {{"scene", scene.name}, {"backend", r.backend}, {"device", solver->device().name},
@@ -86,7 +87,7 @@ int main(int argc, char** argv) {
   try {
     config::write_json_atomically(out, records);
   } catch (const std::exception& e) {
-    std::cerr << "bench_live_backends: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     return 1;
   }
   return 0;

@@ -17,6 +17,7 @@
 
 #include "hapfluid/config/command_line.hpp"
 #include "hapfluid/config/json_output.hpp"
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
@@ -76,15 +77,14 @@ void measure(const std::string& sweep, const config::Scene& scene, int steps, bo
     metrics["vulkan_over_cpu"] = ms / cpu_ms;
   }
   records.push_back(config::bench_record("bench_sim_vulkan", std::move(params), std::move(metrics)));
-  std::fprintf(stderr,
-               "bench_sim_vulkan: %-5s %6zu particles (%zu body) on %s: %7.2f ms/step, %6.1f steps/s "
-               "[sort %.2f, density %.2f, forces %.2f, bodies %.2f, integrate %.2f, reductions %.2f ms]",
-               sweep.c_str(), fluid + body, body, solver.device().name.c_str(), ms, steps / wall,
-               pass(after.sort_s, before.sort_s), pass(after.density_s, before.density_s),
-               pass(after.forces_s, before.forces_s), pass(after.bodies_s, before.bodies_s),
-               pass(after.integration_s, before.integration_s), pass(after.reductions_s, before.reductions_s));
-  if (with_cpu) std::fprintf(stderr, "; cpu backend, 2 threads: %.2f ms/step", cpu_ms);
-  std::fprintf(stderr, "\n");
+  char cpu[64] = "";
+  if (with_cpu) std::snprintf(cpu, sizeof cpu, "; cpu backend, 2 threads: %.2f ms/step", cpu_ms);
+  log::info("%-5s %6zu particles (%zu body) on %s: %7.2f ms/step, %6.1f steps/s "
+            "[sort %.2f, density %.2f, forces %.2f, bodies %.2f, integrate %.2f, reductions %.2f ms]%s",
+            sweep.c_str(), fluid + body, body, solver.device().name.c_str(), ms, steps / wall,
+            pass(after.sort_s, before.sort_s), pass(after.density_s, before.density_s),
+            pass(after.forces_s, before.forces_s), pass(after.bodies_s, before.bodies_s),
+            pass(after.integration_s, before.integration_s), pass(after.reductions_s, before.reductions_s), cpu);
 }
 
 }  // namespace
@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
       measure("fig6c", matched_scene(dir, total, bodies), steps, validation, false, {{"bodies", k}});
     }
   } catch (const std::exception& e) {
-    std::cerr << "bench_sim_vulkan: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     std::filesystem::remove_all(dir);
     return 1;
   }
@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
   try {
     config::write_json_atomically(out, records);
   } catch (const std::exception& e) {
-    std::cerr << "bench_sim_vulkan: " << e.what() << "\n";
+    log::Line(log::Level::error) << "" << e.what();
     return 1;
   }
   return 0;

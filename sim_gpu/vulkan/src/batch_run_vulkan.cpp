@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/config/scene.hpp"
 #include "hapfluid/sim/outputs.hpp"
 #include "hapfluid/sim/run_stats.hpp"
@@ -51,8 +52,8 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
   // The device is chosen (or found missing) before any output is touched.
   VulkanSolver solver(build_model(scene), solver_options);
   const SimulationModel& m = solver.model();
-  progress << "haptic-sim: Vulkan device: " << solver.device().name << " (" << solver.device().type << ", "
-           << solver.device().driver << ")\n";
+  log::Line(log::Level::info) << "Vulkan device: " << solver.device().name << " (" << solver.device().type << ", "
+                              << solver.device().driver << ")";
 
   std::filesystem::create_directories(o.out / "particles");
   remove_previous_outputs(o.out);  // only now: a scene or device that fails leaves a previous run as it was
@@ -107,10 +108,14 @@ BatchResult run_batch_vulkan(const BatchOptions& o, const VulkanRunOptions& vulk
       const double wall = elapsed();
       if (o.progress_line || k + 1 == frames || (k + 1) % std::max(1, frames / 10) == 0) {
         char line[160];
-        std::snprintf(line, sizeof line, "haptic-sim: t = %.3f / %.3f s, %llu steps, %.1f steps/s, real-time factor %.3f",
+        std::snprintf(line, sizeof line, "t = %.3f / %.3f s, %llu steps, %.1f steps/s, real-time factor %.3f",
                       t1, duration, static_cast<unsigned long long>(r.steps), r.steps / std::max(wall, 1e-9),
                       t1 / std::max(wall, 1e-9));
-        progress << (o.progress_line ? "\r" : "") << line << (o.progress_line && k + 1 < frames ? "" : "\n") << std::flush;
+        // A terminal gets one line redrawn in place; a log, a line every tenth of the run.
+        if (o.progress_line)
+          progress << "\r" << line << (k + 1 < frames ? "" : "\n") << std::flush;
+        else
+          log::info("%s", line);
       }
     }
     solver.check_finite();
@@ -135,8 +140,8 @@ BatchResult run_batch_on_backend(const BatchOptions& options, const VulkanRunOpt
     try {
       return run_batch_vulkan(options, vulkan, progress);
     } catch (const VulkanUnavailable& e) {
-      progress << "haptic-sim: notice: " << e.what() << "\n"
-               << "haptic-sim: notice: --backend auto: running on the cpu backend instead\n";
+      log::notice("notice: %s", e.what());
+      log::notice("notice: --backend auto: running on the cpu backend instead");
       BatchOptions cpu = options;
       cpu.backend = "cpu";
       return run_batch(cpu, progress);

@@ -1,3 +1,4 @@
+#include "hapfluid/config/log.hpp"
 #include "hapfluid/sim_vulkan/context.hpp"
 
 #include <cstdio>
@@ -354,7 +355,7 @@ std::vector<std::string> Context::validation_messages() const {
 void Context::on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity, const char* message) {
   const bool error = severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
   (error ? errors_ : warnings_).fetch_add(1);
-  if (print_messages_) std::fprintf(stderr, "Vulkan validation %s: %s\n", error ? "error" : "warning", message);
+  if (print_messages_) (error ? log::error : log::warning)("Vulkan validation %s: %s", error ? "error" : "warning", message);
   std::lock_guard<std::mutex> lock(messages_mutex_);
   if (messages_.size() < kKeptMessages) messages_.push_back(std::string(error ? "error: " : "warning: ") + message);
 }

@@ -1,6 +1,7 @@
 // The command-line convention of every hapfluid executable, on CLI11:
 //  - `--help` prints the usage to stdout and exits 0; `--version` prints "<tool> <build id>";
-//  - a usage error exits 2 with one line on stderr naming the option and what was wrong.
+//  - a usage error exits 2 with one line on stderr naming the option and what was wrong;
+//  - `--log-level` sets what the log (log.hpp) lets through.
 #pragma once
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "hapfluid/config/build_id.hpp"
+#include "hapfluid/config/log.hpp"
 
 namespace hapfluid::config {
 
@@ -74,10 +76,25 @@ inline CLI::Validator three_numbers() {
 
 // The convention's parts that live on the App; call before adding options:
 //  - `--version`;
+//  - `--log-level`, and the log's messages named after the tool;
 //  - an option given twice takes its last value, so a launcher can append overrides.
 inline void apply_convention(CLI::App& app) {
+  log::set_tool(app.get_name());
   app.option_defaults()->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   app.set_version_flag("--version", app.get_name() + " " + build_id(), "print the build id and exit");
+  app.add_option_function<std::string>(
+         "--log-level",
+         [](const std::string& text) {
+           if (const auto level = log::parse_level(text)) log::set_level(*level);
+         },
+         std::string("messages at this level and above: ") + log::level_names() +
+             " (default: $HAPFLUID_LOG_LEVEL, else info)")
+      ->check(CLI::Validator(
+          [](std::string& text) -> std::string {
+            if (log::parse_level(text)) return {};
+            return "must be one of " + std::string(log::level_names()) + ", not \"" + text + "\"";
+          },
+          "LEVEL"));
 }
 
 // Parses argv into `app`. Returns -1 when the tool should go on, else the exit code to return
@@ -96,7 +113,7 @@ inline int parse_command_line(CLI::App& app, int argc, const char* const* argv) 
     std::printf("%s\n", version.what());
     return 0;
   } catch (const CLI::ParseError& error) {
-    std::fprintf(stderr, "%s: %s (%s --help for usage)\n", app.get_name().c_str(), error.what(), app.get_name().c_str());
+    log::error("%s (%s --help for usage)", error.what(), app.get_name().c_str());
     return kUsageExitCode;
   }
 }
