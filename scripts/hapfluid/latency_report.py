@@ -30,9 +30,10 @@ import time
 
 import numpy as np
 
+from .c_constants import LoopFlag
 from .paths import ROOT as SOURCE_DIR
 DEGRADED_FLAGS = {0: "no SCHED_FIFO", 1: "memory not locked", 2: "not pinned to its CPU"}
-NOT_PREEMPT_RT = 1 << 3
+NOT_PREEMPT_RT = LoopFlag.not_preempt_rt
 
 
 def percentiles(values_us: np.ndarray) -> dict:

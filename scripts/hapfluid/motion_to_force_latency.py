@@ -43,11 +43,12 @@ import sys
 
 import numpy as np
 
+from .c_constants import Flag
 from .paths import ROOT
 PIECES = ("device_to_loop", "loop_to_sim", "sim_to_loop", "loop_to_device")
 SEQUENCE_MODULUS = 256      # classic CAN carries the low 8 bits of every sequence number
 MATCH_WINDOW_NS = 128e6     # half the modulus at 1 kHz: a match within it is unambiguous
-WAITING_TO_ENGAGE, HARD_ZERO = 1 << 7, 1 << 12  # safety::Flag bits (rt_core/include/hapfluid/safety/flags.hpp)
+WAITING_TO_ENGAGE, HARD_ZERO = Flag.waiting_to_engage, Flag.hard_zero
 
 
 def load_columns(path: pathlib.Path, names, integer=False) -> dict:

@@ -22,6 +22,7 @@ from hil_stack import (FAULT_COMMUNICATION_CONSTRAINTS, FAULT_DEVICE_NOT_LISTENI
                        FAULT_FOREIGN_COMMAND, FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, FLAG_FORCE_NORM_LIMITED, FLAG_HARD_ZERO,
                        FLAG_NONFINITE_INPUT, FLAG_SIM_STALE_RAMP, FLAG_TORQUE_NORM_LIMITED, LINK_FAULTS, Stack,
                        TraceFollower, engaged, force, read_csv)
+from hapfluid.c_constants import DeviceFault
 from hapfluid.launcher import load_toml
 from hapfluid.proto import can_encode
 from hapfluid.proto.pycan_loopback import LoopbackBus
@@ -43,7 +44,7 @@ FOREIGN_FORCE_N = (20.0, 0.0, 0.0)
 # Invalid COMMAND sets a bus peer sends at once: twice the fake firmware's burst (10 in 100 ms,
 # fake_firmware.hpp DeviceModel) that latches bad_commands.
 BAD_COMMAND_SETS = 20
-HF_FAULT_BAD_COMMANDS = 1 << 2  # firmware_bridge/codec/include/hapfluid/wire/codec.h
+HF_FAULT_BAD_COMMANDS = DeviceFault.BAD_COMMANDS
 DROP_PROBABILITY = 0.8  # of the device's STATEs: gaps beyond link_timeout_ms come every few ms
 # Every device message, from the injection on: five times link_timeout_ms. The link timeout sees
 # the gap the delay opens only at a tick inside it: a loop woken late through most of a gap just

@@ -27,8 +27,10 @@ import time
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from hapfluid.c_constants import Fault, Flag
 from hapfluid.launcher import cpu_placement, device_scene, load_toml, private_rig_text  # shared with the launcher
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 LEAD_IN_S = 1.5  # scripted hands hold still this long (the loop engages, the fluid settles)
 SCENES = ROOT / "config" / "scenes"
@@ -45,24 +47,23 @@ def scene_file(scene) -> pathlib.Path:
     own = HIL_SCENES / f"{scene}.toml"
     return own if own.exists() else SCENES / f"{scene}.toml"
 
-# safety::Fault bits (rt_core/include/hapfluid/safety/flags.hpp)
-FAULT_ESTOP = 1 << 0
-FAULT_LINK_TIMEOUT = 1 << 1
-FAULT_LINK_INVALID = 1 << 2
-FAULT_DEVICE_REPORTED = 1 << 3
-FAULT_SIM_STALE = 1 << 4
-FAULT_FOREIGN_COMMAND = 1 << 5
-FAULT_COMMUNICATION_CONSTRAINTS = 1 << 6
-FAULT_DEVICE_NOT_LISTENING = 1 << 7
+# safety::Fault and Flag bits, generated from rt_core/include/hapfluid/safety/flags.hpp at build time
+FAULT_ESTOP = Fault.estop
+FAULT_LINK_TIMEOUT = Fault.link_timeout
+FAULT_LINK_INVALID = Fault.link_invalid
+FAULT_DEVICE_REPORTED = Fault.device_reported
+FAULT_SIM_STALE = Fault.sim_stale
+FAULT_FOREIGN_COMMAND = Fault.foreign_command
+FAULT_COMMUNICATION_CONSTRAINTS = Fault.communication_constraints
+FAULT_DEVICE_NOT_LISTENING = Fault.device_not_listening
 LINK_FAULTS = FAULT_LINK_TIMEOUT | FAULT_LINK_INVALID | FAULT_DEVICE_REPORTED | FAULT_DEVICE_NOT_LISTENING
-# safety::Flag bits (rt_core/include/hapfluid/safety/flags.hpp)
-FLAG_NONFINITE_INPUT = 1 << 0
-FLAG_FORCE_NORM_LIMITED = 1 << 1
-FLAG_TORQUE_NORM_LIMITED = 1 << 3
-FLAG_WAITING_TO_ENGAGE = 1 << 7
-FLAG_ENGAGING = 1 << 8
-FLAG_SIM_STALE_RAMP = 1 << 9
-FLAG_HARD_ZERO = 1 << 12
+FLAG_NONFINITE_INPUT = Flag.nonfinite_input
+FLAG_FORCE_NORM_LIMITED = Flag.force_norm_limited
+FLAG_TORQUE_NORM_LIMITED = Flag.torque_norm_limited
+FLAG_WAITING_TO_ENGAGE = Flag.waiting_to_engage
+FLAG_ENGAGING = Flag.engaging
+FLAG_SIM_STALE_RAMP = Flag.sim_stale_ramp
+FLAG_HARD_ZERO = Flag.hard_zero
 # A loop recovering from a fault: zero until the load is small or steady, then a ramp; a sim
 # back before its stale ramp-down ended fades in instead.
 RECOVERY_FLAGS = FLAG_WAITING_TO_ENGAGE | FLAG_ENGAGING | FLAG_SIM_STALE_RAMP

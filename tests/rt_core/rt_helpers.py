@@ -6,16 +6,17 @@ import pathlib
 import subprocess
 import time
 
+from hapfluid.c_constants import Fault, Flag, LoopFlag
+
 RIGS = pathlib.Path(__file__).resolve().parent / "rigs"
 
-# LoopFlag bits (rt_core/include/hapfluid/rt/rt_setup.hpp)
-LOOP_NO_FIFO = 1 << 0
-LOOP_NO_MLOCK = 1 << 1
-# safety::Flag / Fault bits (rt_core/include/hapfluid/safety/flags.hpp)
-FLAG_NONFINITE = 1 << 0
-FAULT_ESTOP = 1 << 0
-FAULT_LINK_TIMEOUT = 1 << 1
-FAULT_SIM_STALE = 1 << 4
+# The headers' bits, generated from them at build time.
+LOOP_NO_FIFO = LoopFlag.no_fifo
+LOOP_NO_MLOCK = LoopFlag.no_mlock
+FLAG_NONFINITE = Flag.nonfinite_input
+FAULT_ESTOP = Fault.estop
+FAULT_LINK_TIMEOUT = Fault.link_timeout
+FAULT_SIM_STALE = Fault.sim_stale
 
 
 def unique_prefix(tag: str) -> str:

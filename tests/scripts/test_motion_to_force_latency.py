@@ -10,11 +10,13 @@ import sys
 import numpy as np
 import pytest
 
+from hapfluid.c_constants import Flag
+
 T0 = 10_000_000_000  # ns, CLOCK_MONOTONIC
 MS = 1_000_000
 DEVICE_PHASE, LOOP_PHASE = 300_000, 250_000
 TRANSIT = 60_000                # a frame's trip over the loopback bus
-WAITING_TO_ENGAGE = 1 << 7
+WAITING_TO_ENGAGE = Flag.waiting_to_engage
 TICKS = 700                     # > 2 x 256: every sequence number wraps
 WAITING = range(100, 150)       # loop ticks held at the engage gate
 LOST = range(300, 303)          # loop ticks the trace lost
