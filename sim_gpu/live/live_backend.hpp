@@ -18,7 +18,7 @@
 // Why a probe: on a 2-core machine lavapipe steps a weakly compressible stirring scene (~850
 // fluid particles, ~1250 steps per simulated second) at ~400-600 steps/s while the cpu backend on
 // one thread makes ~1500 (sim_gpu/live/README.md has the numbers); on a rig with a GPU, Vulkan wins.
-// The rule is "Vulkan by default, never a silently slowed fluid": the probe decides
+// The rule is "Vulkan by default, never a silently slowed fluid": the probe decides
 // which on the machine and scene at hand instead of a hard-coded device list.
 #pragma once
 

@@ -637,7 +637,7 @@ TEST(SafetyLayer, EngageSettingsComeFromTheRigWithTorqueCounterpartsDerived) {
 }
 
 TEST(SafetyLayer, AZeroHoldWindowKeepsTheSmallCommandRuleOnly) {
-  // engage_hold_ms = 0 is the pre-issue-8 behaviour, for a rig whose operator wants it.
+  // engage_hold_ms = 0 is the gate without a hold window, for a rig whose operator wants it.
   SafetyConfig c;
   c.engage_hold_ms = 0;
   Harness h(c);

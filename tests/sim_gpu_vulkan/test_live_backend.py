@@ -38,7 +38,7 @@ def no_driver_env():
 
 
 def test_auto_runs_vulkan_on_a_scene_it_keeps_up_with(binary, source_dir, tmp_path):
-    # The default: the live fluid on Vulkan (lavapipe here). The light scene needs 100
+    # The default: the live fluid on Vulkan (lavapipe here). The light scene needs 100
     # steps/s (its fixed 10 ms step); lavapipe made 220-630 on this 2-core machine under two CPU
     # hogs (probe real-time factor >= 2.2, twice the bar), so the probe keeps Vulkan and the run
     # follows the wall clock. A machine loaded by something else can still slow the probe below
