@@ -1,6 +1,7 @@
 # hapfluid — the only entry point a user needs.
 #   make          install what is missing, build
 #   make test     ... and run every test (ctest + pytest), with their summaries
+#   make check    ... and run the fast tier only (no whole-scene validation, live stack or QEMU)
 #   make run      ... and run the main job (SCENE=<name> for another scene)
 #   make bench    ... and run every benchmark, JSON under out/bench/ (installs SPlisHSPlasH for the comparison)
 #   make fuzz     fuzz every reader of untrusted input (clang, libFuzzer, ASan+UBSan in build-fuzz/),
@@ -21,7 +22,7 @@ PY := $(VENV)/bin/python
 JOBS ?= $(shell nproc)
 KERNEL ?= default
 
-.PHONY: all deps build test test-cpp test-py run bench fuzz install clean hil
+.PHONY: all deps build test check run bench fuzz install clean hil
 
 all: build
 
@@ -36,6 +37,9 @@ build: deps $(BUILD)/build.ninja
 
 test: build
 	@bash scripts/run-tests.sh $(BUILD)
+
+check: build
+	@bash scripts/run-tests.sh $(BUILD) --fast
 
 run: build
 	@$(PY) -m hapfluid run --build $(BUILD) --scene $(SCENE) $(if $(DURATION),--duration $(DURATION))

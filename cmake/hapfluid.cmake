@@ -1,9 +1,11 @@
 # Helpers every part uses to declare tests and benchmarks the same way.
 include(GoogleTest)
 
-# hapfluid_add_gtest(NAME SOURCES a.cpp b.cpp LIBS lib1 lib2 [LABELS l1] [TIMEOUT s])
+# hapfluid_add_gtest(NAME SOURCES a.cpp b.cpp LIBS lib1 lib2 [LABELS label] [TIMEOUT s])
 # A GoogleTest executable registered with ctest, one ctest entry per test case. Tests run from
-# the source tree so they find config/ and ../shared/ by relative path.
+# the source tree so they find config/ and ../shared/ by relative path. One label per executable
+# (gtest_discover_tests would read a second as a property name); `slow` keeps it out of
+# `make check`.
 function(hapfluid_add_gtest name)
   cmake_parse_arguments(T "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT T_TIMEOUT)

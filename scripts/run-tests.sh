@@ -2,9 +2,22 @@
 # Runs every test: GoogleTest suites under ctest, then the Python suites under pytest. Both
 # print their own closing summary; the script fails if either fails. pytest's exit code 5
 # ("no tests collected") is not a failure of the build: it is reported and passes.
+#
+#   run-tests.sh [BUILD] [--fast]
+# --fast (`make check`): the fast tier, without the ctest label `slow` and the pytest marker
+# `slow` (whole-scene validation, the live stack, the QEMU guest).
 set -uo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-build="${1:-build}"
+build=build
+ctest_tier=()
+pytest_tier=()
+for arg in "$@"; do
+  case "$arg" in
+    --fast) ctest_tier=(-LE slow); pytest_tier=(-m "not slow") ;;
+    -*) echo "run-tests: unknown option $arg (--fast)" >&2; exit 2 ;;
+    *) build="$arg" ;;
+  esac
+done
 case "$build" in /*) ;; *) build="$here/$build" ;; esac
 cd "$here"
 
@@ -15,11 +28,11 @@ shm_before="$(ls /dev/shm 2>/dev/null | grep '^hapfluid' | sort)"
 echo "== C/C++ tests (ctest) =="
 # One test at a time: several suites check real-time behaviour (1 kHz loops, watchdogs) across
 # processes, and a neighbour test saturating the other core would only measure the machine.
-ctest --test-dir "$build" --output-on-failure -j 1 --timeout 600
+ctest --test-dir "$build" --output-on-failure -j 1 --timeout 600 ${ctest_tier[@]+"${ctest_tier[@]}"}
 ctest_rc=$?
 
 echo "== Python tests (pytest) =="
-HAPFLUID_BUILD="$build" "$here/.venv/bin/python" -m pytest -q -p no:cacheprovider tests
+HAPFLUID_BUILD="$build" "$here/.venv/bin/python" -m pytest -q -p no:cacheprovider ${pytest_tier[@]+"${pytest_tier[@]}"} tests
 py_rc=$?
 if [ "$py_rc" -eq 5 ]; then
   echo "pytest: no Python tests were collected"

@@ -1,4 +1,5 @@
-"""Shared pytest fixtures: where the build and the source tree are, and how to find binaries."""
+"""Shared pytest fixtures: where the build and the source tree are, and how to find binaries; and
+the `slow` marker that `make check` leaves out (`make test` runs everything)."""
 import os
 import pathlib
 
@@ -7,6 +8,22 @@ import pytest
 SOURCE_DIR = pathlib.Path(__file__).resolve().parent.parent
 BUILD_DIR = pathlib.Path(os.environ.get("HAPFLUID_BUILD", SOURCE_DIR / "build")).resolve()
 SHARED_DIR = (SOURCE_DIR.parent / "shared").resolve()
+
+
+# Folders whose every test runs the live stack, a QEMU guest or whole scenes: slow as a whole.
+SLOW_FOLDERS = ("hil", "hil-kernel", "scenarios")
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "slow: runs for seconds (live stack, QEMU, whole scenes); "
+                                       "`make check` deselects it, `make test` runs it")
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        folder = pathlib.Path(str(item.fspath)).resolve().relative_to(SOURCE_DIR / "tests").parts[0]
+        if folder in SLOW_FOLDERS:
+            item.add_marker(pytest.mark.slow)
 
 
 @pytest.fixture(scope="session")

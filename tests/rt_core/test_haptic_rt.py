@@ -18,6 +18,7 @@ def rows_between(rows, start_ns, end_ns):
     return [r for r in rows if start_ns <= r["wake_ns"] < end_ns]
 
 
+@pytest.mark.slow
 def test_killing_the_sim_ramps_the_wrench_to_zero_and_a_restart_resumes(binary, tmp_path):
     # one_arm.toml: sim_stale_ms = 50, sim_ramp_down_ms = 100. The stand-in sim pushes 2 N along z at
     # 100 Hz. After kill -9 the wrench must be zero within 50 + 100 ms (+10 ms for the last sample's
@@ -129,6 +130,7 @@ def test_a_hostile_sim_never_pushes_beyond_the_rig_limits(binary, tmp_path, patt
         assert all(int(r["d0_flags"]) & limited_or_waiting for r in rows[-500:])
 
 
+@pytest.mark.slow
 def test_estop_latches_until_an_explicit_reset(binary, tmp_path):
     # SIGUSR1 latches the e-stop: zero at once and it stays zero; SIGUSR2 resets it and the wrench
     # re-engages (0.5 N is below the 1 N engage threshold) through the ramp.

@@ -72,6 +72,7 @@ def test_bad_trace_is_refused_with_its_name(source_dir, tmp_path):
 
 
 @pytest.mark.skipif(not shutil.which("cyclictest"), reason="cyclictest (rt-tests) not installed")
+@pytest.mark.slow
 def test_side_by_side_run_with_cyclictest(source_dir, build_dir, tmp_path):
     trace = tmp_path / "trace.csv"
     result = subprocess.run([sys.executable, "-m", "hapfluid.latency_report", str(trace),

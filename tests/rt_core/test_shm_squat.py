@@ -27,6 +27,7 @@ def squat(path):
 
 
 @pytest.mark.skipif(os.geteuid() != 0, reason="chown to another user needs root")
+@pytest.mark.slow
 def test_squatted_channel_names_neither_hijack_nor_block_the_rig(binary, tmp_path):
     prefix = unique_prefix("squat")
     shm = "/dev/shm/" + prefix

@@ -22,6 +22,7 @@ def stirring(source_dir, build_dir, tmp_path_factory):
     return out, result
 
 
+@pytest.mark.slow
 def test_the_stirring_scenario_checks_that_the_force_opposes_the_stroke(stirring):
     # §6.4.1, fig. 8: the fluid drags the spoon, so along the stroke force and hand velocity have
     # opposite signs on average: mean F_x v_x < 0 (W), judged on what the hand felt.
@@ -34,6 +35,7 @@ def test_the_stirring_scenario_checks_that_the_force_opposes_the_stroke(stirring
     assert "stirring  holds" in result.stdout and "the force opposes the stroke" in result.stdout
 
 
+@pytest.mark.slow
 def test_the_table_has_the_sim_rate_real_time_factor_and_loop_latency_per_scene(stirring, source_dir):
     out, result = stirring
     row = json.loads((out / "scenarios.json").read_text())["scenes"]["spoon_stirring"]
@@ -50,6 +52,7 @@ def test_the_table_has_the_sim_rate_real_time_factor_and_loop_latency_per_scene(
     assert f"/{row['wake_latency_us']['p99']:.0f}/" in line
 
 
+@pytest.mark.slow
 def test_the_fig8_plot_is_written(stirring):
     out, _ = stirring
     image = matplotlib.image.imread(out / "fig8_stirring.png")

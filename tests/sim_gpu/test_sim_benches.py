@@ -5,6 +5,8 @@ fluid.solver out gets the schema's default, which the Vulkan backend does not ru
 import json
 import subprocess
 
+import pytest
+
 
 def run_bench(build_dir, name, out):
     path = build_dir / "bench" / name
@@ -15,6 +17,7 @@ def run_bench(build_dir, name, out):
     return json.loads(out.read_text())
 
 
+@pytest.mark.slow
 def test_bench_sim_cpu_steps_each_pool_with_its_named_method(build_dir, tmp_path):
     records = run_bench(build_dir, "bench_sim_cpu", tmp_path / "cpu.json")
     pools = [r for r in records if r["params"]["sweep"] == "pool"]
@@ -30,6 +33,7 @@ def test_bench_sim_cpu_steps_each_pool_with_its_named_method(build_dir, tmp_path
     assert all(r["metrics"]["steps_per_s"] > 0 for r in records if "steps_per_s" in r["metrics"])
 
 
+@pytest.mark.slow
 def test_bench_sim_vulkan_runs_its_pools_and_figures(build_dir, tmp_path):
     records = run_bench(build_dir, "bench_sim_vulkan", tmp_path / "vulkan.json")
     assert {r["params"]["sweep"] for r in records} == {"pool", "fig6b", "fig6c"}
