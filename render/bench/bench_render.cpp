@@ -26,7 +26,7 @@ struct Case {
   int filter_iterations;
 };
 
-hapfluid::config::Json run_case(VulkanContext& ctx, const Case& c, int frames) {
+hapfluid::config::Json run_case(hapfluid::vk::Context& ctx, const Case& c, int frames) {
   const double radius = 0.008;
   RenderSettings s;
   s.width = c.width;
@@ -91,7 +91,7 @@ int main(int argc, char** argv) {
   app.add_option("--frames", frames, "frames timed per case")->check(CLI::Range(1, 100000));
   if (const int code = hapfluid::config::parse_command_line(app, argc, argv); code >= 0) return code;
   try {
-    VulkanContext ctx({false, {}, false});
+    hapfluid::vk::Context ctx(context_options(false, false));
     std::vector<hapfluid::config::Json> records;
     records.push_back(run_case(ctx, {32768, 1024, 768, 4}, frames));  // the paper's workload
     records.push_back(run_case(ctx, {8192, 1024, 768, 4}, frames));

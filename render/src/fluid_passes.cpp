@@ -86,7 +86,7 @@ void FluidRenderer::Impl::record_scene(VkCommandBuffer cmd, const OrbitCamera& c
   vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene_pipeline);
   vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, scene_layout, 0, 1, &graphics_set, 0, nullptr);
   VkDeviceSize offset = 0;
-  VkBuffer vb = scene_vertices.buffer();
+  VkBuffer vb = scene_vertices.handle();
   vkCmdBindVertexBuffers(cmd, 0, 1, &vb, &offset);
   const glm::vec3 eye = camera.eye_m();
   for (const DrawRange& range : geometry.draws) {
@@ -109,7 +109,7 @@ void FluidRenderer::Impl::record_scene(VkCommandBuffer cmd, const OrbitCamera& c
     glm::vec4 radius{float(scene.particle_radius_m), 0, 0, 0};
     vkCmdPushConstants(cmd, spheres_layout, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
                        sizeof radius, &radius);
-    VkBuffer pb = sphere_particles.buffer();
+    VkBuffer pb = sphere_particles.handle();
     vkCmdBindVertexBuffers(cmd, 0, 1, &pb, &offset);
     vkCmdDraw(cmd, 4, sphere_count, 0, 0);
   }
@@ -217,9 +217,9 @@ void FluidRenderer::Impl::submit_and_wait() {
   VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &cmd;
-  vk_check(vkQueueSubmit(ctx.queue(), 1, &submit, fence), "vkQueueSubmit (frame)");
-  vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences (frame)");
-  vk_check(vkResetFences(ctx.device(), 1, &fence), "vkResetFences");
+  vk::check(vkQueueSubmit(ctx.queue(), 1, &submit, fence), "vkQueueSubmit (frame)");
+  vk::check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences (frame)");
+  vk::check(vkResetFences(ctx.device(), 1, &fence), "vkResetFences");
 }
 
 }  // namespace hapfluid::render

@@ -1,14 +1,27 @@
 #include "hapfluid/render/fluid_renderer.hpp"
 
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
+#include <string_view>
 
 #include "fluid_renderer_impl.hpp"
 #include "frame_uniforms.hpp"
 
 namespace hapfluid::render {
 
-FluidRenderer::FluidRenderer(VulkanContext& ctx, const SceneDescription& scene, const RenderSettings& settings)
+vk::ContextOptions context_options(bool validation, bool swapchain) {
+  vk::ContextOptions o;
+  o.application = "haptic-render";
+  o.queue = vk::QueueKind::graphics;
+  // The renderer's own switch (its unit's environment): the simulator is not slowed by it.
+  const char* env = std::getenv("HAPFLUID_VK_VALIDATION");
+  o.validation = validation || (env && *env && std::string_view(env) != "0");
+  o.swapchain = swapchain;
+  return o;
+}
+
+FluidRenderer::FluidRenderer(vk::Context& ctx, const SceneDescription& scene, const RenderSettings& settings)
     : impl_(std::make_unique<Impl>(ctx, scene, settings)) {
   if (settings.width < 16 || settings.height < 16 || settings.width > 8192 || settings.height > 8192 ||
       settings.width % 2 || settings.height % 2)
@@ -50,18 +63,18 @@ float FluidRenderer::splat_radius_m() const { return impl_->splat_radius(); }
 
 Rgba8Image FluidRenderer::render_to_image(CompositeMode mode) {
   Impl& m = *impl_;
-  vk_check(vkResetCommandBuffer(m.cmd, 0), "vkResetCommandBuffer");
+  vk::check(vkResetCommandBuffer(m.cmd, 0), "vkResetCommandBuffer");
   VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
   begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-  vk_check(vkBeginCommandBuffer(m.cmd, &begin), "vkBeginCommandBuffer");
+  vk::check(vkBeginCommandBuffer(m.cmd, &begin), "vkBeginCommandBuffer");
   m.record(m.cmd, camera_, mode);
   VkBufferImageCopy copy{};
   copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
   copy.imageExtent = {m.targets.full.width, m.targets.full.height, 1};
-  vkCmdCopyImageToBuffer(m.cmd, m.targets.output.image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, m.readback.buffer(), 1,
+  vkCmdCopyImageToBuffer(m.cmd, m.targets.output.image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, m.readback.handle(), 1,
                          &copy);
   m.timer.stamp(m.cmd);
-  vk_check(vkEndCommandBuffer(m.cmd), "vkEndCommandBuffer");
+  vk::check(vkEndCommandBuffer(m.cmd), "vkEndCommandBuffer");
   m.submit_and_wait();
   Rgba8Image image{m.targets.full.width, m.targets.full.height, {}};
   const auto* bytes = static_cast<const uint8_t*>(m.readback.mapped());
@@ -77,13 +90,14 @@ FloatImage FluidRenderer::read_buffer(FluidBuffer which) {
   if (image.format() == VK_FORMAT_R16G16_SFLOAT || image.format() == VK_FORMAT_R16_SFLOAT)
     throw std::runtime_error("render: read_buffer supports 32-bit fluid buffers only");
   const VkExtent2D e = image.extent();
-  HostBuffer staging(m.ctx, VkDeviceSize(e.width) * e.height * texel_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+  vk::Buffer staging(m.ctx, VkDeviceSize(e.width) * e.height * texel_bytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                     vk::MemoryUse::host);
   m.ctx.run_once([&](VkCommandBuffer c) {
     transition(c, image, state::compute_read, state::transfer_src);
     VkBufferImageCopy copy{};
     copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
     copy.imageExtent = {e.width, e.height, 1};
-    vkCmdCopyImageToBuffer(c, image.image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.buffer(), 1, &copy);
+    vkCmdCopyImageToBuffer(c, image.image(), VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging.handle(), 1, &copy);
     transition(c, image, state::transfer_src, state::compute_read);
   });
   FloatImage out{e.width, e.height, std::vector<float>(size_t(e.width) * e.height)};
@@ -97,7 +111,7 @@ FloatImage FluidRenderer::read_buffer(FluidBuffer which) {
 }
 
 PassTimes FluidRenderer::pass_times() const {
-  std::array<double, GpuTimer::capacity - 1> ms{};
+  std::array<double, vk::GpuTimer::capacity - 1> ms{};
   uint32_t n = 0;
   PassTimes t;
   if (!impl_->timer.intervals_ms(ms, n) || n < 5) return t;

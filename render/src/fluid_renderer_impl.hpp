@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "fluid_tiles.hpp"
-#include "gpu_timer.hpp"
+#include "hapfluid/vk/gpu_timer.hpp"
 #include "hapfluid/render/fluid_renderer.hpp"
 #include "render_targets.hpp"
 #include "scene_geometry.hpp"
@@ -25,21 +25,21 @@ struct CompositePush {
 };
 
 struct FluidRenderer::Impl {
-  Impl(VulkanContext& c, const SceneDescription& s, const RenderSettings& r)
+  Impl(vk::Context& c, const SceneDescription& s, const RenderSettings& r)
       : ctx(c), scene(s), settings(r), formats(choose_formats(c)),
         targets(c, formats, {r.width, r.height}, {std::max(1u, r.width / 2), std::max(1u, r.height / 2)}),
         timer(c) {}
   ~Impl();
 
-  VulkanContext& ctx;
+  vk::Context& ctx;
   SceneDescription scene;
   RenderSettings settings;
   TargetFormats formats;
   RenderTargets targets;
-  GpuTimer timer;
+  vk::GpuTimer timer;
   SceneGeometry geometry;
 
-  HostBuffer uniforms, scene_vertices, fluid_particles, sphere_particles, readback, tile_buffer;
+  vk::Buffer uniforms, scene_vertices, fluid_particles, sphere_particles, readback, tile_buffer;
   size_t fluid_capacity = 0;
   uint32_t fluid_count = 0, sphere_count = 0;  // fluid: visible splats of this frame
   std::vector<BodyPose> body_poses;
@@ -77,7 +77,7 @@ struct FluidRenderer::Impl {
   void record_normals(VkCommandBuffer cmd);
   void record_composite(VkCommandBuffer cmd, CompositeMode mode);
   const GpuImage& final_smoothed() const;
-  void ensure_capacity(HostBuffer& buffer, size_t bytes, VkBufferUsageFlags usage);
+  void ensure_capacity(vk::Buffer& buffer, size_t bytes, VkBufferUsageFlags usage);
   void ensure_fluid_capacity(size_t particles);
   void write_particle_binding();
   void submit_and_wait();

@@ -40,21 +40,21 @@ FluidRenderer::Impl::~Impl() {
   if (cmd) vkFreeCommandBuffers(d, ctx.command_pool(), 1, &cmd);
 }
 
-void FluidRenderer::Impl::ensure_capacity(HostBuffer& buffer, size_t bytes, VkBufferUsageFlags usage) {
-  if (buffer.size() >= bytes && buffer.buffer()) return;
+void FluidRenderer::Impl::ensure_capacity(vk::Buffer& buffer, size_t bytes, VkBufferUsageFlags usage) {
+  if (buffer.size() >= bytes && buffer.handle()) return;
   vkQueueWaitIdle(ctx.queue());  // the old buffer may still be read by a windowed frame
-  buffer = HostBuffer(ctx, std::max<size_t>(bytes + bytes / 2, 256), usage);
+  buffer = vk::Buffer(ctx, std::max<size_t>(bytes + bytes / 2, 256), usage, vk::MemoryUse::host);
 }
 
 void FluidRenderer::Impl::ensure_fluid_capacity(size_t particles) {
-  if (particles <= fluid_capacity && fluid_particles.buffer()) return;
+  if (particles <= fluid_capacity && fluid_particles.handle()) return;
   fluid_capacity = std::max<size_t>(particles + particles / 2, 1024);
   ensure_capacity(fluid_particles, fluid_capacity * sizeof(glm::vec3), VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
   write_particle_binding();
 }
 
 void FluidRenderer::Impl::write_particle_binding() {
-  VkDescriptorBufferInfo info{fluid_particles.buffer(), 0, VK_WHOLE_SIZE};
+  VkDescriptorBufferInfo info{fluid_particles.handle(), 0, VK_WHOLE_SIZE};
   VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
   w.dstSet = graphics_set;
   w.dstBinding = 1;
@@ -65,16 +65,17 @@ void FluidRenderer::Impl::write_particle_binding() {
 }
 
 void FluidRenderer::Impl::create_buffers() {
-  uniforms = HostBuffer(ctx, sizeof(FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT);
+  uniforms = vk::Buffer(ctx, sizeof(FrameUniforms), VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT, vk::MemoryUse::host);
   geometry = build_scene_geometry(scene);
-  scene_vertices = HostBuffer(ctx, std::max<size_t>(geometry.vertices.size() * sizeof(SceneVertex), 64),
-                              VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+  scene_vertices = vk::Buffer(ctx, std::max<size_t>(geometry.vertices.size() * sizeof(SceneVertex), 64),
+                              VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, vk::MemoryUse::host);
   std::memcpy(scene_vertices.mapped(), geometry.vertices.data(), geometry.vertices.size() * sizeof(SceneVertex));
   ensure_capacity(sphere_particles, 1024 * sizeof(glm::vec4), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
-  readback = HostBuffer(ctx, VkDeviceSize(settings.width) * settings.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+  readback = vk::Buffer(ctx, VkDeviceSize(settings.width) * settings.height * 4, VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                        vk::MemoryUse::host);
   grid = {targets.half.width, targets.half.height};
-  tile_buffer = HostBuffer(ctx, VkDeviceSize(grid.tiles_x()) * grid.tiles_y() * sizeof(uint32_t),
-                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT);
+  tile_buffer = vk::Buffer(ctx, VkDeviceSize(grid.tiles_x()) * grid.tiles_y() * sizeof(uint32_t),
+                           VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, vk::MemoryUse::host);
   tile_marks.reserve(size_t(grid.tiles_x()) * grid.tiles_y());
   tiles.reserve(size_t(grid.tiles_x()) * grid.tiles_y());
 
@@ -82,9 +83,9 @@ void FluidRenderer::Impl::create_buffers() {
   alloc.commandPool = ctx.command_pool();
   alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
   alloc.commandBufferCount = 1;
-  vk_check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
+  vk::check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
   VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-  vk_check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
+  vk::check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
 }
 
 void FluidRenderer::Impl::create_descriptors() {
@@ -94,7 +95,7 @@ void FluidRenderer::Impl::create_descriptors() {
   s.mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST;
   s.addressModeU = s.addressModeV = s.addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE;
   s.maxLod = 0.0f;
-  vk_check(vkCreateSampler(d, &s, nullptr, &sampler), "vkCreateSampler");
+  vk::check(vkCreateSampler(d, &s, nullptr, &sampler), "vkCreateSampler");
 
   const VkShaderStageFlags vf = VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT;
   const VkShaderStageFlags cs = VK_SHADER_STAGE_COMPUTE_BIT;
@@ -121,20 +122,20 @@ void FluidRenderer::Impl::create_descriptors() {
   p.maxSets = 8;
   p.poolSizeCount = 4;
   p.pPoolSizes = sizes;
-  vk_check(vkCreateDescriptorPool(d, &p, nullptr, &pool), "vkCreateDescriptorPool");
+  vk::check(vkCreateDescriptorPool(d, &p, nullptr, &pool), "vkCreateDescriptorPool");
   auto allocate = [&](VkDescriptorSetLayout layout) {
     VkDescriptorSetAllocateInfo a{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     a.descriptorPool = pool;
     a.descriptorSetCount = 1;
     a.pSetLayouts = &layout;
     VkDescriptorSet set;
-    vk_check(vkAllocateDescriptorSets(d, &a, &set), "vkAllocateDescriptorSets");
+    vk::check(vkAllocateDescriptorSets(d, &a, &set), "vkAllocateDescriptorSets");
     return set;
   };
 
   // Every binding of every set is written: lavapipe 22.3 crashes in its worker thread on a bound
   // set with an unwritten binding, and the validation layer does not report it.
-  VkDescriptorBufferInfo ubo{uniforms.buffer(), 0, sizeof(FrameUniforms)};
+  VkDescriptorBufferInfo ubo{uniforms.handle(), 0, sizeof(FrameUniforms)};
   auto write_ubo = [&](VkDescriptorSet set) {
     VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstSet = set;
@@ -144,7 +145,7 @@ void FluidRenderer::Impl::create_descriptors() {
     w.pBufferInfo = &ubo;
     vkUpdateDescriptorSets(d, 1, &w, 0, nullptr);
   };
-  VkDescriptorBufferInfo tile_info{tile_buffer.buffer(), 0, VK_WHOLE_SIZE};
+  VkDescriptorBufferInfo tile_info{tile_buffer.handle(), 0, VK_WHOLE_SIZE};
   auto write_tiles = [&](VkDescriptorSet set, uint32_t b) {
     VkWriteDescriptorSet w{VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     w.dstSet = set;

@@ -42,7 +42,7 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
   const auto buffers_dir = options.out_dir / "buffers";
   if (options.dump_buffers) std::filesystem::create_directories(buffers_dir);
 
-  VulkanContext ctx({options.validation, {}, false});
+  vk::Context ctx(context_options(options.validation, false));
   RunSummary summary;
   double gpu_ms_sum = 0.0;
   {
@@ -80,7 +80,7 @@ RunSummary run_headless(FrameSource& source, const HeadlessOptions& options) {
   }
   ctx.destroy_device();  // count what the validation layer says about leaks too
   summary.mean_frame_ms = summary.frames ? gpu_ms_sum / double(summary.frames) : 0.0;
-  summary.validation_messages = ctx.validation_errors() + ctx.validation_warnings();
+  summary.validation_messages = int(ctx.validation_counts().errors + ctx.validation_counts().warnings);
   log::info("wrote %ld frames to %s (mean %.1f ms per frame)", summary.frames,
             options.out_dir.string().c_str(), summary.mean_frame_ms);
 

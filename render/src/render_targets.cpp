@@ -20,7 +20,7 @@ const char* name(VkFormat f) {
   }
 }
 
-VkFormat first_with(const VulkanContext& ctx, const std::vector<VkFormat>& candidates, VkFormatFeatureFlags need,
+VkFormat first_with(const vk::Context& ctx, const std::vector<VkFormat>& candidates, VkFormatFeatureFlags need,
                     const char* role) {
   for (VkFormat f : candidates)
     if ((ctx.format_features(f) & need) == need) return f;
@@ -32,7 +32,7 @@ VkFormat first_with(const VulkanContext& ctx, const std::vector<VkFormat>& candi
 
 }  // namespace
 
-TargetFormats choose_formats(const VulkanContext& ctx) {
+TargetFormats choose_formats(const vk::Context& ctx) {
   TargetFormats t;
   const VkFormatFeatureFlags sampled_linear =
       VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT;
@@ -60,7 +60,7 @@ TargetFormats choose_formats(const VulkanContext& ctx) {
   return t;
 }
 
-RenderTargets::RenderTargets(VulkanContext& ctx, const TargetFormats& f, VkExtent2D full_extent, VkExtent2D half_extent)
+RenderTargets::RenderTargets(vk::Context& ctx, const TargetFormats& f, VkExtent2D full_extent, VkExtent2D half_extent)
     : full(full_extent), half(half_extent) {
   const VkImageUsageFlags sampled = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
   scene_colour = GpuImage(ctx, full, f.scene_colour, VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | sampled);

@@ -20,10 +20,10 @@ struct TargetFormats {
 };
 
 // Throws std::runtime_error naming the format and the missing feature when nothing fits.
-TargetFormats choose_formats(const VulkanContext& ctx);
+TargetFormats choose_formats(const vk::Context& ctx);
 
 struct RenderTargets {
-  RenderTargets(VulkanContext& ctx, const TargetFormats& formats, VkExtent2D full, VkExtent2D half);
+  RenderTargets(vk::Context& ctx, const TargetFormats& formats, VkExtent2D full, VkExtent2D half);
   VkExtent2D full, half;
   GpuImage scene_colour, scene_depth, zbuffer;  // full resolution
   GpuImage splat, smoothed_a, smoothed_b, normals;  // half resolution

@@ -5,7 +5,7 @@
 
 namespace hapfluid::render {
 
-Swapchain::Swapchain(VulkanContext& ctx, VkSurfaceKHR surface, GLFWwindow* window) : ctx_(ctx), surface_(surface) {
+Swapchain::Swapchain(vk::Context& ctx, VkSurfaceKHR surface, GLFWwindow* window) : ctx_(ctx), surface_(surface) {
   VkBool32 present = VK_FALSE;
   vkGetPhysicalDeviceSurfaceSupportKHR(ctx.physical_device(), ctx.queue_family(), surface, &present);
   if (!present) throw std::runtime_error("Vulkan: the graphics queue cannot present to this window");
@@ -34,7 +34,7 @@ void Swapchain::create(GLFWwindow* window) {
     glfwGetFramebufferSize(window, &fb_width, &fb_height);
   }
   VkSurfaceCapabilitiesKHR caps;
-  vk_check(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(ctx_.physical_device(), surface_, &caps),
+  vk::check(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(ctx_.physical_device(), surface_, &caps),
            "vkGetPhysicalDeviceSurfaceCapabilitiesKHR");
   const VkImageUsageFlags usage =
       VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT;
@@ -58,7 +58,7 @@ void Swapchain::create(GLFWwindow* window) {
   info.compositeAlpha = VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR;
   info.presentMode = VK_PRESENT_MODE_FIFO_KHR;  // always available; paced by the display
   info.clipped = VK_TRUE;
-  vk_check(vkCreateSwapchainKHR(ctx_.device(), &info, nullptr, &swapchain_), "vkCreateSwapchainKHR");
+  vk::check(vkCreateSwapchainKHR(ctx_.device(), &info, nullptr, &swapchain_), "vkCreateSwapchainKHR");
   uint32_t count = 0;
   vkGetSwapchainImagesKHR(ctx_.device(), swapchain_, &count, nullptr);
   images_.resize(count);
@@ -70,12 +70,12 @@ void Swapchain::create(GLFWwindow* window) {
     v.format = format_;
     v.subresourceRange = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 1, 0, 1};
     VkImageView view;
-    vk_check(vkCreateImageView(ctx_.device(), &v, nullptr, &view), "vkCreateImageView (swapchain)");
+    vk::check(vkCreateImageView(ctx_.device(), &v, nullptr, &view), "vkCreateImageView (swapchain)");
     views_.push_back(view);
   }
   VkSemaphoreCreateInfo s{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
   render_done_.resize(count);
-  for (auto& sem : render_done_) vk_check(vkCreateSemaphore(ctx_.device(), &s, nullptr, &sem), "vkCreateSemaphore");
+  for (auto& sem : render_done_) vk::check(vkCreateSemaphore(ctx_.device(), &s, nullptr, &sem), "vkCreateSemaphore");
 }
 
 void Swapchain::destroy() {

@@ -9,13 +9,13 @@
 
 #include <vector>
 
-#include "hapfluid/render/vk_context.hpp"
+#include "hapfluid/vk/context.hpp"
 
 namespace hapfluid::render {
 
 class Swapchain {
  public:
-  Swapchain(VulkanContext& ctx, VkSurfaceKHR surface, GLFWwindow* window);
+  Swapchain(vk::Context& ctx, VkSurfaceKHR surface, GLFWwindow* window);
   ~Swapchain() { destroy(); }
   Swapchain(const Swapchain&) = delete;
   Swapchain& operator=(const Swapchain&) = delete;
@@ -36,7 +36,7 @@ class Swapchain {
   void create(GLFWwindow* window);
   void destroy();
 
-  VulkanContext& ctx_;
+  vk::Context& ctx_;
   VkSurfaceKHR surface_;
   VkSwapchainKHR swapchain_ = VK_NULL_HANDLE;
   VkFormat format_ = VK_FORMAT_UNDEFINED;

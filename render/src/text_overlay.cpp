@@ -13,7 +13,7 @@
 
 namespace hapfluid::render {
 
-TextOverlay::TextOverlay(VulkanContext& ctx, VkFormat target_format) : ctx_(ctx) {
+TextOverlay::TextOverlay(vk::Context& ctx, VkFormat target_format) : ctx_(ctx) {
   layout_ = make_pipeline_layout(ctx.device(), VK_NULL_HANDLE, sizeof(glm::vec2), VK_SHADER_STAGE_VERTEX_BIT);
   GraphicsPipelineDesc d;
   d.vertex = HAPFLUID_SHADER(overlay_vert);
@@ -33,7 +33,7 @@ TextOverlay::TextOverlay(VulkanContext& ctx, VkFormat target_format) : ctx_(ctx)
   d.blends = {blend};
   d.layout = layout_;
   pipeline_ = make_graphics_pipeline(ctx.device(), d);
-  vertices_ = HostBuffer(ctx, max_vertices * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT);
+  vertices_ = vk::Buffer(ctx, max_vertices * sizeof(Vertex), VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, vk::MemoryUse::host);
   pending_.reserve(max_vertices);
 }
 
@@ -85,7 +85,7 @@ void TextOverlay::record(VkCommandBuffer cmd, VkImageView target, VkExtent2D ext
   const glm::vec2 inv_size(1.0f / float(extent.width), 1.0f / float(extent.height));
   vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof inv_size, &inv_size);
   VkDeviceSize offset = 0;
-  VkBuffer buffer = vertices_.buffer();
+  VkBuffer buffer = vertices_.handle();
   vkCmdBindVertexBuffers(cmd, 0, 1, &buffer, &offset);
   vkCmdDraw(cmd, uint32_t(pending_.size()), 1, 0, 0);
   vkCmdEndRendering(cmd);

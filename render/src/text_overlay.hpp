@@ -13,7 +13,7 @@ namespace hapfluid::render {
 
 class TextOverlay {
  public:
-  TextOverlay(VulkanContext& ctx, VkFormat target_format);
+  TextOverlay(vk::Context& ctx, VkFormat target_format);
   ~TextOverlay();
   TextOverlay(const TextOverlay&) = delete;
   TextOverlay& operator=(const TextOverlay&) = delete;
@@ -29,10 +29,10 @@ class TextOverlay {
     glm::vec2 pixel;
     glm::vec4 colour;
   };
-  VulkanContext& ctx_;
+  vk::Context& ctx_;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
   VkPipeline pipeline_ = VK_NULL_HANDLE;
-  HostBuffer vertices_;
+  vk::Buffer vertices_;
   std::vector<Vertex> pending_;
   std::vector<char> font_quads_ = std::vector<char>(64000);
   static constexpr size_t max_vertices = 60000;

@@ -8,7 +8,7 @@ VkShaderModule make_module(VkDevice device, ShaderCode code) {
   info.codeSize = code.bytes;
   info.pCode = code.words;
   VkShaderModule module;
-  vk_check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
+  vk::check(vkCreateShaderModule(device, &info, nullptr, &module), "vkCreateShaderModule");
   return module;
 }
 
@@ -96,7 +96,7 @@ VkPipeline make_graphics_pipeline(VkDevice device, const GraphicsPipelineDesc& d
   VkResult r = vkCreateGraphicsPipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline);
   vkDestroyShaderModule(device, vert, nullptr);
   vkDestroyShaderModule(device, frag, nullptr);
-  vk_check(r, "vkCreateGraphicsPipelines");
+  vk::check(r, "vkCreateGraphicsPipelines");
   return pipeline;
 }
 
@@ -108,7 +108,7 @@ VkPipeline make_compute_pipeline(VkDevice device, ShaderCode code, VkPipelineLay
   VkPipeline pipeline;
   VkResult r = vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline);
   vkDestroyShaderModule(device, module, nullptr);
-  vk_check(r, "vkCreateComputePipelines");
+  vk::check(r, "vkCreateComputePipelines");
   return pipeline;
 }
 
@@ -117,7 +117,7 @@ VkDescriptorSetLayout make_set_layout(VkDevice device, const std::vector<VkDescr
   info.bindingCount = static_cast<uint32_t>(bindings.size());
   info.pBindings = bindings.data();
   VkDescriptorSetLayout layout;
-  vk_check(vkCreateDescriptorSetLayout(device, &info, nullptr, &layout), "vkCreateDescriptorSetLayout");
+  vk::check(vkCreateDescriptorSetLayout(device, &info, nullptr, &layout), "vkCreateDescriptorSetLayout");
   return layout;
 }
 
@@ -130,7 +130,7 @@ VkPipelineLayout make_pipeline_layout(VkDevice device, VkDescriptorSetLayout set
   info.pushConstantRangeCount = push_bytes ? 1 : 0;
   info.pPushConstantRanges = &range;
   VkPipelineLayout layout;
-  vk_check(vkCreatePipelineLayout(device, &info, nullptr, &layout), "vkCreatePipelineLayout");
+  vk::check(vkCreatePipelineLayout(device, &info, nullptr, &layout), "vkCreatePipelineLayout");
   return layout;
 }
 

@@ -4,7 +4,7 @@
 
 #include <vector>
 
-#include "hapfluid/render/vk_context.hpp"
+#include "hapfluid/vk/context.hpp"
 
 namespace hapfluid::render {
 

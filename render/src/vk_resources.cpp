@@ -4,7 +4,7 @@
 
 namespace hapfluid::render {
 
-GpuImage::GpuImage(VulkanContext& ctx, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,
+GpuImage::GpuImage(vk::Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,
                    VkImageAspectFlags aspect)
     : ctx_(&ctx), format_(format), extent_(extent), aspect_(aspect) {
   VkImageCreateInfo info{VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO};
@@ -17,20 +17,20 @@ GpuImage::GpuImage(VulkanContext& ctx, VkExtent2D extent, VkFormat format, VkIma
   info.tiling = VK_IMAGE_TILING_OPTIMAL;
   info.usage = usage;
   info.initialLayout = VK_IMAGE_LAYOUT_UNDEFINED;
-  vk_check(vkCreateImage(ctx.device(), &info, nullptr, &image_), "vkCreateImage");
+  vk::check(vkCreateImage(ctx.device(), &info, nullptr, &image_), "vkCreateImage");
   VkMemoryRequirements req;
   vkGetImageMemoryRequirements(ctx.device(), image_, &req);
   VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
   alloc.allocationSize = req.size;
   alloc.memoryTypeIndex = ctx.memory_type(req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-  vk_check(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_), "vkAllocateMemory (image)");
-  vk_check(vkBindImageMemory(ctx.device(), image_, memory_, 0), "vkBindImageMemory");
+  vk::check(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_), "vkAllocateMemory (image)");
+  vk::check(vkBindImageMemory(ctx.device(), image_, memory_, 0), "vkBindImageMemory");
   VkImageViewCreateInfo view{VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO};
   view.image = image_;
   view.viewType = VK_IMAGE_VIEW_TYPE_2D;
   view.format = format;
   view.subresourceRange = {aspect, 0, 1, 0, 1};
-  vk_check(vkCreateImageView(ctx.device(), &view, nullptr, &view_), "vkCreateImageView");
+  vk::check(vkCreateImageView(ctx.device(), &view, nullptr, &view_), "vkCreateImageView");
 }
 
 GpuImage::~GpuImage() { release(); }
@@ -53,44 +53,6 @@ void GpuImage::release() {
   if (!ctx_) return;
   vkDestroyImageView(ctx_->device(), view_, nullptr);
   vkDestroyImage(ctx_->device(), image_, nullptr);
-  vkFreeMemory(ctx_->device(), memory_, nullptr);
-  ctx_ = nullptr;
-}
-
-HostBuffer::HostBuffer(VulkanContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage) : ctx_(&ctx), size_(size) {
-  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
-  info.size = size;
-  info.usage = usage;
-  info.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-  vk_check(vkCreateBuffer(ctx.device(), &info, nullptr, &buffer_), "vkCreateBuffer");
-  VkMemoryRequirements req;
-  vkGetBufferMemoryRequirements(ctx.device(), buffer_, &req);
-  VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
-  alloc.allocationSize = req.size;
-  alloc.memoryTypeIndex = ctx.memory_type(
-      req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
-  vk_check(vkAllocateMemory(ctx.device(), &alloc, nullptr, &memory_), "vkAllocateMemory (buffer)");
-  vk_check(vkBindBufferMemory(ctx.device(), buffer_, memory_, 0), "vkBindBufferMemory");
-  vk_check(vkMapMemory(ctx.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
-}
-
-HostBuffer::~HostBuffer() { release(); }
-
-HostBuffer& HostBuffer::operator=(HostBuffer&& o) noexcept {
-  if (this != &o) {
-    release();
-    ctx_ = std::exchange(o.ctx_, nullptr);
-    buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
-    memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
-    size_ = std::exchange(o.size_, 0);
-    mapped_ = std::exchange(o.mapped_, nullptr);
-  }
-  return *this;
-}
-
-void HostBuffer::release() {
-  if (!ctx_) return;
-  vkDestroyBuffer(ctx_->device(), buffer_, nullptr);
   vkFreeMemory(ctx_->device(), memory_, nullptr);
   ctx_ = nullptr;
 }

@@ -1,15 +1,17 @@
-// GPU images and buffers with their memory (one allocation each: a handful of render targets do
-// not need a sub-allocator), and the image barrier the passes use between each other.
+// GPU images with their memory (one allocation each: a handful of render targets do not need a
+// sub-allocator), and the image barrier the passes use between each other. Buffers are the Vulkan
+// base's (hapfluid/vk/buffer.hpp).
 #pragma once
 
-#include "hapfluid/render/vk_context.hpp"
+#include "hapfluid/vk/buffer.hpp"
+#include "hapfluid/vk/context.hpp"
 
 namespace hapfluid::render {
 
 class GpuImage {
  public:
   GpuImage() = default;
-  GpuImage(VulkanContext& ctx, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,
+  GpuImage(vk::Context& ctx, VkExtent2D extent, VkFormat format, VkImageUsageFlags usage,
            VkImageAspectFlags aspect = VK_IMAGE_ASPECT_COLOR_BIT);
   ~GpuImage();
   GpuImage(GpuImage&& other) noexcept { *this = std::move(other); }
@@ -23,35 +25,13 @@ class GpuImage {
 
  private:
   void release();
-  VulkanContext* ctx_ = nullptr;
+  vk::Context* ctx_ = nullptr;
   VkImage image_ = VK_NULL_HANDLE;
   VkDeviceMemory memory_ = VK_NULL_HANDLE;
   VkImageView view_ = VK_NULL_HANDLE;
   VkFormat format_ = VK_FORMAT_UNDEFINED;
   VkExtent2D extent_{};
   VkImageAspectFlags aspect_ = VK_IMAGE_ASPECT_COLOR_BIT;
-};
-
-// A host-visible, persistently mapped buffer (vertex data, uniforms, read-backs).
-class HostBuffer {
- public:
-  HostBuffer() = default;
-  HostBuffer(VulkanContext& ctx, VkDeviceSize size, VkBufferUsageFlags usage);
-  ~HostBuffer();
-  HostBuffer(HostBuffer&& other) noexcept { *this = std::move(other); }
-  HostBuffer& operator=(HostBuffer&& other) noexcept;
-
-  VkBuffer buffer() const { return buffer_; }
-  VkDeviceSize size() const { return size_; }
-  void* mapped() const { return mapped_; }
-
- private:
-  void release();
-  VulkanContext* ctx_ = nullptr;
-  VkBuffer buffer_ = VK_NULL_HANDLE;
-  VkDeviceMemory memory_ = VK_NULL_HANDLE;
-  VkDeviceSize size_ = 0;
-  void* mapped_ = nullptr;
 };
 
 struct ImageState {

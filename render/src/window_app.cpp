@@ -85,17 +85,17 @@ void draw_stats(TextOverlay& overlay, const Frame& frame, double render_fps, dou
 
 // The per-frame Vulkan objects of the window loop (one frame in flight).
 struct FrameSync {
-  explicit FrameSync(VulkanContext& c) : ctx(c) {
+  explicit FrameSync(vk::Context& c) : ctx(c) {
     VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
     alloc.commandPool = ctx.command_pool();
     alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
     alloc.commandBufferCount = 1;
-    vk_check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
+    vk::check(vkAllocateCommandBuffers(ctx.device(), &alloc, &cmd), "vkAllocateCommandBuffers");
     VkFenceCreateInfo fence_info{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
     fence_info.flags = VK_FENCE_CREATE_SIGNALED_BIT;
-    vk_check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
+    vk::check(vkCreateFence(ctx.device(), &fence_info, nullptr, &fence), "vkCreateFence");
     VkSemaphoreCreateInfo sem_info{VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO};
-    vk_check(vkCreateSemaphore(ctx.device(), &sem_info, nullptr, &acquired), "vkCreateSemaphore");
+    vk::check(vkCreateSemaphore(ctx.device(), &sem_info, nullptr, &acquired), "vkCreateSemaphore");
   }
   ~FrameSync() {
     vkDeviceWaitIdle(ctx.device());
@@ -103,9 +103,9 @@ struct FrameSync {
     vkDestroyFence(ctx.device(), fence, nullptr);
     vkFreeCommandBuffers(ctx.device(), ctx.command_pool(), 1, &cmd);
   }
-  void wait() { vk_check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences"); }
+  void wait() { vk::check(vkWaitForFences(ctx.device(), 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences"); }
 
-  VulkanContext& ctx;
+  vk::Context& ctx;
   VkCommandBuffer cmd = VK_NULL_HANDLE;
   VkFence fence = VK_NULL_HANDLE;
   VkSemaphore acquired = VK_NULL_HANDLE;  // swapchain image ready to be written
@@ -114,7 +114,7 @@ struct FrameSync {
 // After the renderer's passes: its output scaled onto the swapchain image, the overlay on top,
 // and (for --screenshot) a copy of exactly what is presented.
 void record_presentation(VkCommandBuffer cmd, const FluidRenderer& renderer, const Swapchain& swapchain,
-                         uint32_t index, TextOverlay& overlay, const HostBuffer* screenshot) {
+                         uint32_t index, TextOverlay& overlay, const vk::Buffer* screenshot) {
   const VkImage target = swapchain.image(index);
   transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::undefined, state::transfer_dst);
   const VkExtent2D src = renderer.output_extent(), dst = swapchain.extent();
@@ -134,13 +134,13 @@ void record_presentation(VkCommandBuffer cmd, const FluidRenderer& renderer, con
   VkBufferImageCopy copy{};
   copy.imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1};
   copy.imageExtent = {dst.width, dst.height, 1};
-  vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot->buffer(), 1, &copy);
+  vkCmdCopyImageToBuffer(cmd, target, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, screenshot->handle(), 1, &copy);
   transition(cmd, target, VK_IMAGE_ASPECT_COLOR_BIT, state::transfer_src, state::present);
 }
 
 // Submits `sync.cmd` (after the image is acquired) and presents; false when the swapchain must be
 // recreated (window resized).
-bool submit_and_present(VulkanContext& ctx, FrameSync& sync, const Swapchain& swapchain, uint32_t index) {
+bool submit_and_present(vk::Context& ctx, FrameSync& sync, const Swapchain& swapchain, uint32_t index) {
   VkPipelineStageFlags wait_stage = VK_PIPELINE_STAGE_TRANSFER_BIT;
   VkSemaphore done = swapchain.render_done(index);
   VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
@@ -151,7 +151,7 @@ bool submit_and_present(VulkanContext& ctx, FrameSync& sync, const Swapchain& sw
   submit.pCommandBuffers = &sync.cmd;
   submit.signalSemaphoreCount = 1;
   submit.pSignalSemaphores = &done;
-  vk_check(vkQueueSubmit(ctx.queue(), 1, &submit, sync.fence), "vkQueueSubmit");
+  vk::check(vkQueueSubmit(ctx.queue(), 1, &submit, sync.fence), "vkQueueSubmit");
   VkPresentInfoKHR present{VK_STRUCTURE_TYPE_PRESENT_INFO_KHR};
   present.waitSemaphoreCount = 1;
   present.pWaitSemaphores = &done;
@@ -161,11 +161,11 @@ bool submit_and_present(VulkanContext& ctx, FrameSync& sync, const Swapchain& sw
   present.pImageIndices = &index;
   const VkResult presented = vkQueuePresentKHR(ctx.queue(), &present);
   if (presented == VK_ERROR_OUT_OF_DATE_KHR || presented == VK_SUBOPTIMAL_KHR) return false;
-  vk_check(presented, "vkQueuePresentKHR");
+  vk::check(presented, "vkQueuePresentKHR");
   return true;
 }
 
-void save_screenshot(const HostBuffer& pixels, VkExtent2D extent, VkFormat format, const std::filesystem::path& file) {
+void save_screenshot(const vk::Buffer& pixels, VkExtent2D extent, VkFormat format, const std::filesystem::path& file) {
   Rgba8Image image{extent.width, extent.height, {}};
   const auto* bytes = static_cast<const uint8_t*>(pixels.mapped());
   image.rgba.assign(bytes, bytes + size_t(image.width) * image.height * 4);
@@ -187,14 +187,14 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
   if (!window) throw std::runtime_error("GLFW: cannot create a window");
   uint32_t ext_count = 0;
   const char** ext = glfwGetRequiredInstanceExtensions(&ext_count);
-  ContextOptions ctx_options{options.validation, {}, true};
+  vk::ContextOptions ctx_options = context_options(options.validation, true);
   for (uint32_t i = 0; i < ext_count; ++i) ctx_options.instance_extensions.emplace_back(ext[i]);
 
   RunSummary summary;
   {
-    VulkanContext ctx(ctx_options);
+    vk::Context ctx(ctx_options);
     VkSurfaceKHR surface;
-    vk_check(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &surface), "glfwCreateWindowSurface");
+    vk::check(glfwCreateWindowSurface(ctx.instance(), window, nullptr, &surface), "glfwCreateWindowSurface");
     {
       FluidRenderer renderer(ctx, source.scene(), options.settings);
       OrbitCamera camera = renderer.camera();
@@ -210,7 +210,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
       log::info("window on %s", renderer.describe().c_str());
 
       FrameSync sync(ctx);
-      HostBuffer screenshot;
+      vk::Buffer screenshot;
       Frame frame;
       bool have_frame = false;
       double first_sim_time_s = 0.0;
@@ -245,8 +245,8 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
           swapchain.recreate(window);
           continue;
         }
-        if (acquire != VK_SUBOPTIMAL_KHR) vk_check(acquire, "vkAcquireNextImageKHR");
-        vk_check(vkResetFences(ctx.device(), 1, &sync.fence), "vkResetFences");
+        if (acquire != VK_SUBOPTIMAL_KHR) vk::check(acquire, "vkAcquireNextImageKHR");
+        vk::check(vkResetFences(ctx.device(), 1, &sync.fence), "vkResetFences");
 
         renderer.set_camera(camera);
         if (fresh) renderer.set_frame(frame);  // the GPU is done with the previous one (fence)
@@ -254,16 +254,16 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
         const bool last_frame = options.max_frames >= 0 && summary.frames + 1 == options.max_frames;
         const bool take_screenshot = last_frame && !options.screenshot.empty();
         if (take_screenshot)
-          screenshot = HostBuffer(ctx, VkDeviceSize(swapchain.extent().width) * swapchain.extent().height * 4,
-                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT);
+          screenshot = vk::Buffer(ctx, VkDeviceSize(swapchain.extent().width) * swapchain.extent().height * 4,
+                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT, vk::MemoryUse::host);
 
-        vk_check(vkResetCommandBuffer(sync.cmd, 0), "vkResetCommandBuffer");
+        vk::check(vkResetCommandBuffer(sync.cmd, 0), "vkResetCommandBuffer");
         VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
         begin.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
-        vk_check(vkBeginCommandBuffer(sync.cmd, &begin), "vkBeginCommandBuffer");
+        vk::check(vkBeginCommandBuffer(sync.cmd, &begin), "vkBeginCommandBuffer");
         renderer.record(sync.cmd);
         record_presentation(sync.cmd, renderer, swapchain, index, overlay, take_screenshot ? &screenshot : nullptr);
-        vk_check(vkEndCommandBuffer(sync.cmd), "vkEndCommandBuffer");
+        vk::check(vkEndCommandBuffer(sync.cmd), "vkEndCommandBuffer");
         const VkExtent2D presented_extent = swapchain.extent();  // before a possible recreation
         if (!submit_and_present(ctx, sync, swapchain, index)) {
           sync.wait();
@@ -286,7 +286,7 @@ RunSummary run_windowed(FrameSource& source, const WindowOptions& options) {
     }
     vkDestroySurfaceKHR(ctx.instance(), surface, nullptr);
     ctx.destroy_device();  // count what the validation layer says about leaks too
-    summary.validation_messages = ctx.validation_errors() + ctx.validation_warnings();
+    summary.validation_messages = int(ctx.validation_counts().errors + ctx.validation_counts().warnings);
   }
   glfwDestroyWindow(window);
   return summary;

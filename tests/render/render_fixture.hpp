@@ -18,13 +18,13 @@ const glm::vec3 ball_centre_m{0.0f, 0.0f, 0.12f};
 
 class ValidatedRenderTest : public ::testing::Test {
  protected:
-  void SetUp() override { ctx = std::make_unique<VulkanContext>(ContextOptions{true, {}, false}); }
+  void SetUp() override { ctx = std::make_unique<vk::Context>(context_options(true, false)); }
   void TearDown() override {
     ctx->destroy_device();  // leaks are reported here, while the counters are still readable
     std::string all;
     for (const auto& m : ctx->validation_messages()) all += m + "\n";
-    EXPECT_EQ(ctx->validation_errors(), 0) << all;
-    EXPECT_EQ(ctx->validation_warnings(), 0) << all;
+    EXPECT_EQ(ctx->validation_counts().errors, 0u) << all;
+    EXPECT_EQ(ctx->validation_counts().warnings, 0u) << all;
   }
 
   static SceneDescription ball_scene() { return synthetic_scene(particle_radius_m); }
@@ -46,7 +46,7 @@ class ValidatedRenderTest : public ::testing::Test {
     return glm::ivec2((ndc * 0.5f + 0.5f) * glm::vec2(width, height));
   }
 
-  std::unique_ptr<VulkanContext> ctx;
+  std::unique_ptr<vk::Context> ctx;
 };
 
 }  // namespace hapfluid::render::test

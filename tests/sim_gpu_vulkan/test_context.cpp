@@ -1,11 +1,16 @@
-// The Vulkan context: device choice, the validation layer, and a clean failure (never a crash)
+// The Vulkan base (sim_gpu/vulkan_base) the compute backend and the renderer share: device
+// choice, both queue kinds, GPU timers, the validation layer, and a clean failure (never a crash)
 // when no Vulkan driver exists, so `auto` can fall back to the CPU backend.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdint>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
-#include "hapfluid/sim_vulkan/context.hpp"
+#include "hapfluid/sim_vulkan/base.hpp"
+#include "hapfluid/vk/gpu_timer.hpp"
 
 namespace hv = hapfluid::sim::vulkan;
 
@@ -27,6 +32,47 @@ TEST(VulkanContext, AutoPicksADeviceWithComputeAndReportsIt) {
   bool listed = false;
   for (const auto& d : hv::list_devices()) listed = listed || d.name == context.description().name;
   EXPECT_TRUE(listed);
+  EXPECT_EQ(context.validation_counts().errors, 0u);
+  EXPECT_EQ(context.validation_counts().warnings, 0u);
+}
+
+TEST(VulkanContext, AGraphicsContextIsVulkan13WithAGraphicsAndComputeQueue) {
+  // What the renderer asks for; the compute context above may take a compute-only family.
+  hv::ContextOptions o = validated();
+  o.queue = hapfluid::vk::QueueKind::graphics;
+  hv::Context context(o);
+  EXPECT_GE(context.description().api_version, VK_API_VERSION_1_3);
+  EXPECT_TRUE(context.description().has_graphics_compute_queue);
+  std::uint32_t families = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &families, nullptr);
+  std::vector<VkQueueFamilyProperties> family(families);
+  vkGetPhysicalDeviceQueueFamilyProperties(context.physical_device(), &families, family.data());
+  const VkQueueFlags both = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+  EXPECT_EQ(family[context.queue_family()].queueFlags & both, both);
+  context.destroy_device();
+  EXPECT_EQ(context.validation_counts().errors, 0u);
+  EXPECT_EQ(context.validation_counts().warnings, 0u);
+}
+
+TEST(VulkanContext, GpuTimerMeasuresPassesOnAComputeContext) {
+  hv::Context context(validated());
+  if (!context.timestamps_supported()) GTEST_SKIP() << context.description().name << " has no timestamps";
+  hapfluid::vk::GpuTimer timer(context);
+  hv::Buffer buffer(context, 1 << 20, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hv::MemoryUse::device);
+  context.run_once([&](VkCommandBuffer cb) {
+    timer.begin(cb);
+    // Two halves: two passes with no hazard between them (the layer checks synchronization).
+    vkCmdFillBuffer(cb, buffer.handle(), 0, 1 << 19, 7u);
+    timer.stamp(cb);
+    vkCmdFillBuffer(cb, buffer.handle(), 1 << 19, 1 << 19, 9u);
+    timer.stamp(cb);
+  });
+  std::array<double, hapfluid::vk::GpuTimer::capacity - 1> ms{};
+  std::uint32_t count = 0;
+  ASSERT_TRUE(timer.intervals_ms(ms, count));
+  ASSERT_EQ(count, 2u);
+  EXPECT_GE(ms[0], 0.0);
+  EXPECT_GE(ms[1], 0.0);
   EXPECT_EQ(context.validation_counts().errors, 0u);
   EXPECT_EQ(context.validation_counts().warnings, 0u);
 }

@@ -15,9 +15,13 @@
 #include "hapfluid/render/camera.hpp"
 #include "hapfluid/render/frame_source.hpp"
 #include "hapfluid/render/image_io.hpp"
-#include "hapfluid/render/vk_context.hpp"
+#include "hapfluid/vk/context.hpp"
 
 namespace hapfluid::render {
+
+// The Vulkan context the renderer needs: a graphics+compute queue on Vulkan 1.3 (dynamic
+// rendering, synchronization2), with a swapchain for a window.
+vk::ContextOptions context_options(bool validation, bool swapchain);
 
 struct RenderSettings {
   uint32_t width = 1024, height = 768;  // output pixels; fluid buffers are half of it (§5.1)
@@ -45,7 +49,7 @@ struct PassTimes {
 
 class FluidRenderer {
  public:
-  FluidRenderer(VulkanContext& ctx, const SceneDescription& scene, const RenderSettings& settings);
+  FluidRenderer(vk::Context& ctx, const SceneDescription& scene, const RenderSettings& settings);
   ~FluidRenderer();
   FluidRenderer(const FluidRenderer&) = delete;
   FluidRenderer& operator=(const FluidRenderer&) = delete;

@@ -6,7 +6,7 @@
 #include <ostream>
 
 #include "hapfluid/sim/batch_run.hpp"
-#include "hapfluid/sim_vulkan/context.hpp"
+#include "hapfluid/sim_vulkan/base.hpp"
 
 namespace hapfluid::sim::vulkan {
 

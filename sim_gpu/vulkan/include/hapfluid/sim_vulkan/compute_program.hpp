@@ -8,8 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "hapfluid/sim_vulkan/buffer.hpp"
-#include "hapfluid/sim_vulkan/context.hpp"
+#include "hapfluid/sim_vulkan/base.hpp"
 
 namespace hapfluid::sim::vulkan {
 

@@ -28,9 +28,8 @@
 
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/model.hpp"
-#include "hapfluid/sim_vulkan/buffer.hpp"
 #include "hapfluid/sim_vulkan/compute_program.hpp"
-#include "hapfluid/sim_vulkan/context.hpp"
+#include "hapfluid/sim_vulkan/base.hpp"
 
 namespace hapfluid::sim::vulkan {
 

@@ -1,13 +1,13 @@
-#include "gpu_timer.hpp"
+#include "hapfluid/vk/gpu_timer.hpp"
 
-namespace hapfluid::render {
+namespace hapfluid::vk {
 
-GpuTimer::GpuTimer(VulkanContext& ctx) : ctx_(ctx) {
+GpuTimer::GpuTimer(Context& ctx) : ctx_(ctx) {
   if (!ctx.timestamps_supported()) return;
   VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
   info.queryType = VK_QUERY_TYPE_TIMESTAMP;
   info.queryCount = capacity;
-  vk_check(vkCreateQueryPool(ctx.device(), &info, nullptr, &pool_), "vkCreateQueryPool");
+  check(vkCreateQueryPool(ctx.device(), &info, nullptr, &pool_), "vkCreateQueryPool");
 }
 
 GpuTimer::~GpuTimer() {
@@ -23,7 +23,8 @@ void GpuTimer::begin(VkCommandBuffer cmd) {
 
 void GpuTimer::stamp(VkCommandBuffer cmd) {
   if (!pool_ || written_ >= capacity) return;
-  vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, pool_, written_++);
+  // The Vulkan 1.0 command, so that compute contexts without synchronization2 time passes too.
+  vkCmdWriteTimestamp(cmd, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_, written_++);
 }
 
 bool GpuTimer::intervals_ms(std::array<double, capacity - 1>& out, uint32_t& count) const {
@@ -38,4 +39,4 @@ bool GpuTimer::intervals_ms(std::array<double, capacity - 1>& out, uint32_t& cou
   return true;
 }
 
-}  // namespace hapfluid::render
+}  // namespace hapfluid::vk

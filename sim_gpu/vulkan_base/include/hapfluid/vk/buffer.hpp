@@ -1,15 +1,15 @@
 // Buffers and their memory. On a unified-memory device (lavapipe, integrated GPUs) device-local
 // memory is also host-visible and is mapped directly; on a discrete GPU uploads and read-backs go
-// through a staging buffer. One allocation per buffer: the backend owns a few dozen buffers,
-// created once per scene.
+// through a staging buffer. One allocation per buffer: the simulator owns a few dozen buffers,
+// created once per scene, the renderer a handful (vertices, uniforms, read-backs).
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
-#include "hapfluid/sim_vulkan/context.hpp"
+#include "hapfluid/vk/context.hpp"
 
-namespace hapfluid::sim::vulkan {
+namespace hapfluid::vk {
 
 enum class MemoryUse {
   device,  // particle arrays: device-local, mapped when the device-local heap is host-visible
@@ -65,4 +65,4 @@ class TexelView {
   VkBufferView view_ = VK_NULL_HANDLE;
 };
 
-}  // namespace hapfluid::sim::vulkan
+}  // namespace hapfluid::vk

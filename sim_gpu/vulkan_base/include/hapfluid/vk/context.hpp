@@ -1,11 +1,15 @@
-// The Vulkan context of the compute backend: the loader (volk, so a machine without libvulkan
+// The one Vulkan base of hapfluid, shared by the simulator's compute backend (sim_gpu/vulkan) and
+// the renderer (render/): the loader (volk, loaded at run time, so a machine without libvulkan
 // still runs the CPU backend), the instance with the Khronos validation layer on request, the
-// choice of a physical device, the logical device with one compute queue, and a command pool.
+// choice of a physical device, the logical device with one queue, a command pool and one-time
+// submissions.
 //
-// Device choice for `auto`: a discrete GPU, else an integrated GPU, else another
-// hardware type, else a CPU implementation (Mesa lavapipe). When nothing usable exists the
+// Two kinds of device: compute (Vulkan 1.2, a compute queue, a compute-only family preferred) and
+// graphics (Vulkan 1.3 with dynamic rendering and synchronization2, a graphics+compute family,
+// swapchain on request). Device choice for `auto`: a discrete GPU, else an integrated GPU, else
+// another hardware type, else a CPU implementation (Mesa lavapipe). When nothing usable exists the
 // constructor throws VulkanUnavailable with a message that says what is missing and how to fix
-// it; the caller (the backend factory) decides whether that is fatal or a fallback to the CPU.
+// it; the caller decides whether that is fatal or a fallback to the CPU.
 #pragma once
 
 #include <volk.h>
@@ -17,7 +21,7 @@
 #include <string>
 #include <vector>
 
-namespace hapfluid::sim::vulkan {
+namespace hapfluid::vk {
 
 // Any failure of a Vulkan call, with the call and the VkResult in the message.
 class VulkanError : public std::runtime_error {
@@ -42,10 +46,20 @@ enum class DevicePreference {
 };
 DevicePreference parse_device_preference(const std::string& text);  // "auto" | "gpu" | "cpu"
 
+enum class QueueKind {
+  compute,   // Vulkan 1.2, compute queue (the simulator)
+  graphics,  // Vulkan 1.3, graphics+compute queue, dynamic rendering, synchronization2 (the renderer)
+};
+
 struct ContextOptions {
+  std::string application = "hapfluid";
+  QueueKind queue = QueueKind::compute;
   DevicePreference device = DevicePreference::automatic;
+  std::vector<std::string> instance_extensions;  // e.g. what GLFW needs for a surface
+  bool swapchain = false;                        // graphics: enable VK_KHR_swapchain on the device
   // Khronos validation layer plus a debug messenger that counts warnings and errors. Tests
-  // always enable it; `haptic-sim --vk-validation` enables it in a run.
+  // always enable it; `haptic-sim --vk-validation`, `haptic-render --validation` (or, for the
+  // renderer, HAPFLUID_VK_VALIDATION=1) enable it in a run.
   bool validation = false;
   // With validation: also the layer's synchronization validation (missing barriers between
   // passes are the bug class a compute pipeline is most prone to).
@@ -61,6 +75,7 @@ struct DeviceDescription {
   std::uint32_t api_version = 0;
   std::string driver;           // driver name and info, e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)"
   bool has_compute_queue = false;
+  bool has_graphics_compute_queue = false;
   std::string version_string() const;  // "1.3.230"
 };
 
@@ -91,7 +106,11 @@ class Context {
   const DeviceDescription& description() const { return description_; }
   bool validation_enabled() const { return validation_; }
 
-  // Timestamps on the compute queue (timestampValidBits > 0); period in ns per tick.
+  // First memory type allowed by `type_bits` with all of `wanted`; throws VulkanError if none.
+  std::uint32_t memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted) const;
+  VkFormatFeatureFlags format_features(VkFormat format) const;  // optimal tiling
+
+  // Timestamps on the context's queue (timestampValidBits > 0); period in ns per tick.
   bool timestamps_supported() const { return timestamp_valid_bits_ > 0; }
   double timestamp_period_ns() const { return properties_.limits.timestampPeriod; }
   std::uint32_t subgroup_size() const { return subgroup_size_; }
@@ -108,20 +127,25 @@ class Context {
     fn(cb);
     end_one_time(cb);
   }
+  VkCommandBuffer begin_one_time();
+  void end_one_time(VkCommandBuffer cb);
+
+  // Destroys the device now (the destructor does it otherwise), so that what the validation layer
+  // reports at device destruction (leaked objects) is counted while the counters can be read.
+  void destroy_device();
 
   // Called by the debug messenger callback.
   void on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity, const char* message);
 
  private:
   void create_instance(const ContextOptions& options);
-  void choose_physical_device(DevicePreference preference);
-  void create_device();
+  void choose_physical_device(const ContextOptions& options);
+  void create_device(const ContextOptions& options);
   void release();
-  VkCommandBuffer begin_one_time();
-  void end_one_time(VkCommandBuffer cb);
 
   bool validation_ = false;
   bool print_messages_ = true;
+  QueueKind queue_kind_ = QueueKind::compute;
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
   VkPhysicalDevice physical_device_ = VK_NULL_HANDLE;
@@ -141,4 +165,4 @@ class Context {
   std::vector<std::string> messages_;
 };
 
-}  // namespace hapfluid::sim::vulkan
+}  // namespace hapfluid::vk

@@ -1,11 +1,12 @@
-#include "hapfluid/config/log.hpp"
-#include "hapfluid/sim_vulkan/context.hpp"
+#include "hapfluid/vk/context.hpp"
 
 #include <cstdio>
 #include <cstring>
 #include <mutex>
 
-namespace hapfluid::sim::vulkan {
+#include "hapfluid/config/log.hpp"
+
+namespace hapfluid::vk {
 namespace {
 
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
@@ -97,7 +98,11 @@ DeviceDescription describe(VkInstance instance, VkPhysicalDevice device) {
   get_families(device, &families, nullptr);
   std::vector<VkQueueFamilyProperties> family(families);
   get_families(device, &families, family.data());
-  for (const auto& f : family) d.has_compute_queue = d.has_compute_queue || (f.queueFlags & VK_QUEUE_COMPUTE_BIT);
+  const VkQueueFlags both = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
+  for (const auto& f : family) {
+    d.has_compute_queue = d.has_compute_queue || (f.queueFlags & VK_QUEUE_COMPUTE_BIT);
+    d.has_graphics_compute_queue = d.has_graphics_compute_queue || (f.queueFlags & both) == both;
+  }
   return d;
 }
 
@@ -134,6 +139,10 @@ const char* result_name(VkResult r) {
     case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
     case VK_ERROR_FORMAT_NOT_SUPPORTED: return "VK_ERROR_FORMAT_NOT_SUPPORTED";
     case VK_ERROR_OUT_OF_POOL_MEMORY: return "VK_ERROR_OUT_OF_POOL_MEMORY";
+    case VK_SUBOPTIMAL_KHR: return "VK_SUBOPTIMAL_KHR";
+    case VK_ERROR_SURFACE_LOST_KHR: return "VK_ERROR_SURFACE_LOST_KHR";
+    case VK_ERROR_OUT_OF_DATE_KHR: return "VK_ERROR_OUT_OF_DATE_KHR";
+    case VK_ERROR_NATIVE_WINDOW_IN_USE_KHR: return "VK_ERROR_NATIVE_WINDOW_IN_USE_KHR";
     default: return "VkResult(unknown)";
   }
 }
@@ -182,12 +191,15 @@ std::vector<DeviceDescription> list_devices(std::string* why_empty) {
   return out;
 }
 
-Context::Context(const ContextOptions& options) : validation_(options.validation), print_messages_(options.print_validation_messages) {
+Context::Context(const ContextOptions& options)
+    : validation_(options.validation),
+      print_messages_(options.print_validation_messages),
+      queue_kind_(options.queue) {
   load_vulkan_loader();
   try {
     create_instance(options);
-    choose_physical_device(options.device);
-    create_device();
+    choose_physical_device(options);
+    create_device(options);
   } catch (...) {
     release();
     throw;
@@ -196,14 +208,17 @@ Context::Context(const ContextOptions& options) : validation_(options.validation
 
 Context::~Context() { release(); }
 
+void Context::destroy_device() {
+  if (!device_) return;
+  vkDeviceWaitIdle(device_);
+  if (one_time_fence_) vkDestroyFence(device_, one_time_fence_, nullptr);
+  if (command_pool_) vkDestroyCommandPool(device_, command_pool_, nullptr);
+  vkDestroyDevice(device_, nullptr);
+  device_ = VK_NULL_HANDLE, command_pool_ = VK_NULL_HANDLE, one_time_fence_ = VK_NULL_HANDLE;
+}
+
 void Context::release() {
-  if (device_) {
-    vkDeviceWaitIdle(device_);
-    if (one_time_fence_) vkDestroyFence(device_, one_time_fence_, nullptr);
-    if (command_pool_) vkDestroyCommandPool(device_, command_pool_, nullptr);
-    vkDestroyDevice(device_, nullptr);
-    device_ = VK_NULL_HANDLE;
-  }
+  destroy_device();
   if (messenger_) vkDestroyDebugUtilsMessengerEXT(instance_, messenger_, nullptr);
   messenger_ = VK_NULL_HANDLE;
   if (instance_) vkDestroyInstance(instance_, nullptr);
@@ -212,6 +227,7 @@ void Context::release() {
 
 void Context::create_instance(const ContextOptions& options) {
   std::vector<const char*> layers, extensions;
+  for (const auto& e : options.instance_extensions) extensions.push_back(e.c_str());
   VkDebugUtilsMessengerCreateInfoEXT debug_info = messenger_info(this);
   VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
   const VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
@@ -229,9 +245,9 @@ void Context::create_instance(const ContextOptions& options) {
     features.pNext = &debug_info;  // messages of vkCreateInstance itself are counted too
   }
   VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
-  app.pApplicationName = "haptic-sim";
+  app.pApplicationName = options.application.c_str();
   app.pEngineName = "hapfluid";
-  app.apiVersion = VK_API_VERSION_1_2;
+  app.apiVersion = options.queue == QueueKind::graphics ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
   VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
   info.pNext = validation_ ? &features : nullptr;
   info.pApplicationInfo = &app;
@@ -247,7 +263,11 @@ void Context::create_instance(const ContextOptions& options) {
   if (validation_) check(vkCreateDebugUtilsMessengerEXT(instance_, &debug_info, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
 }
 
-void Context::choose_physical_device(DevicePreference preference) {
+void Context::choose_physical_device(const ContextOptions& options) {
+  const DevicePreference preference = options.device;
+  const bool graphics = options.queue == QueueKind::graphics;
+  // The renderer draws with dynamic rendering and synchronization2 (Vulkan 1.3).
+  const std::uint32_t min_api = graphics ? VK_API_VERSION_1_3 : VK_API_VERSION_1_2;
   std::uint32_t count = 0;
   check(vkEnumeratePhysicalDevices(instance_, &count, nullptr), "vkEnumeratePhysicalDevices");
   std::vector<VkPhysicalDevice> devices(count);
@@ -259,7 +279,8 @@ void Context::choose_physical_device(DevicePreference preference) {
   for (VkPhysicalDevice d : devices) {
     const DeviceDescription desc = describe(instance_, d);
     seen += (seen.empty() ? "" : ", ") + desc.name + " (" + desc.type + ", Vulkan " + desc.version_string() + ")";
-    if (!desc.has_compute_queue || desc.api_version < VK_API_VERSION_1_2) continue;
+    if (!desc.has_compute_queue || desc.api_version < min_api) continue;
+    if (graphics && !desc.has_graphics_compute_queue) continue;
     const bool is_cpu = desc.vk_type == VK_PHYSICAL_DEVICE_TYPE_CPU;
     if (preference == DevicePreference::gpu && is_cpu) continue;
     if (preference == DevicePreference::cpu && !is_cpu) continue;
@@ -273,7 +294,8 @@ void Context::choose_physical_device(DevicePreference preference) {
   if (!physical_device_) {
     const char* wanted = preference == DevicePreference::gpu ? "a GPU" : preference == DevicePreference::cpu ? "a CPU device (lavapipe)" : "a device";
     throw VulkanUnavailable(std::string("Vulkan: no suitable device: wanted ") + wanted +
-                            " with Vulkan 1.2 and a compute queue; found: " + (seen.empty() ? "none" : seen));
+                            (graphics ? " with Vulkan 1.3 and a graphics+compute queue" : " with Vulkan 1.2 and a compute queue") +
+                            "; found: " + (seen.empty() ? "none" : seen));
   }
   vkGetPhysicalDeviceProperties(physical_device_, &properties_);
   vkGetPhysicalDeviceMemoryProperties(physical_device_, &memory_properties_);
@@ -284,14 +306,24 @@ void Context::choose_physical_device(DevicePreference preference) {
   subgroup_size_ = subgroup.subgroupSize;
 }
 
-void Context::create_device() {
+void Context::create_device(const ContextOptions& options) {
+  const bool graphics = options.queue == QueueKind::graphics;
   std::uint32_t families = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &families, nullptr);
   std::vector<VkQueueFamilyProperties> family(families);
   vkGetPhysicalDeviceQueueFamilyProperties(physical_device_, &families, family.data());
-  // Prefer a compute-only family (async compute on GPUs), else any family with compute.
+  // Compute: prefer a compute-only family (async compute on GPUs), else any family with compute.
+  // Graphics: the first family with both.
   int chosen = -1;
+  const VkQueueFlags both = VK_QUEUE_GRAPHICS_BIT | VK_QUEUE_COMPUTE_BIT;
   for (std::uint32_t i = 0; i < families; ++i) {
+    if (graphics) {
+      if ((family[i].queueFlags & both) == both) {
+        chosen = static_cast<int>(i);
+        break;
+      }
+      continue;
+    }
     if (!(family[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
     if (chosen < 0 || !(family[i].queueFlags & VK_QUEUE_GRAPHICS_BIT)) chosen = static_cast<int>(i);
   }
@@ -307,6 +339,24 @@ void Context::create_device() {
   VkDeviceCreateInfo info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
   info.queueCreateInfoCount = 1;
   info.pQueueCreateInfos = &queue_info;
+  VkPhysicalDeviceVulkan13Features v13{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
+  VkPhysicalDeviceFeatures2 features{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2};
+  std::vector<const char*> extensions;
+  if (graphics) {
+    VkPhysicalDeviceFeatures supported{};
+    vkGetPhysicalDeviceFeatures(physical_device_, &supported);
+    if (!supported.shaderStorageImageWriteWithoutFormat)
+      throw VulkanUnavailable("Vulkan: " + description_.name +
+                              " lacks shaderStorageImageWriteWithoutFormat (the renderer's filter passes need it)");
+    v13.dynamicRendering = VK_TRUE;
+    v13.synchronization2 = VK_TRUE;
+    features.pNext = &v13;
+    features.features.shaderStorageImageWriteWithoutFormat = VK_TRUE;
+    info.pNext = &features;
+    if (options.swapchain) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+  }
+  info.enabledExtensionCount = static_cast<std::uint32_t>(extensions.size());
+  info.ppEnabledExtensionNames = extensions.data();
   check(vkCreateDevice(physical_device_, &info, nullptr, &device_), "vkCreateDevice");
   // Device functions stay the loader's dispatching trampolines (no volkLoadDevice): volk's
   // pointers are process-wide, and trampolines are right for every device of every context.
@@ -345,6 +395,18 @@ void Context::end_one_time(VkCommandBuffer cb) {
   check(wait, "vkWaitForFences (one-time)");
 }
 
+std::uint32_t Context::memory_type(std::uint32_t type_bits, VkMemoryPropertyFlags wanted) const {
+  for (std::uint32_t i = 0; i < memory_properties_.memoryTypeCount; ++i)
+    if ((type_bits & (1u << i)) && (memory_properties_.memoryTypes[i].propertyFlags & wanted) == wanted) return i;
+  throw VulkanError("Vulkan: no memory type with the wanted properties on " + description_.name);
+}
+
+VkFormatFeatureFlags Context::format_features(VkFormat format) const {
+  VkFormatProperties p;
+  vkGetPhysicalDeviceFormatProperties(physical_device_, format, &p);
+  return p.optimalTilingFeatures;
+}
+
 ValidationCounts Context::validation_counts() const { return {warnings_.load(), errors_.load()}; }
 
 std::vector<std::string> Context::validation_messages() const {
@@ -360,4 +422,4 @@ void Context::on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT sever
   if (messages_.size() < kKeptMessages) messages_.push_back(std::string(error ? "error: " : "warning: ") + message);
 }
 
-}  // namespace hapfluid::sim::vulkan
+}  // namespace hapfluid::vk

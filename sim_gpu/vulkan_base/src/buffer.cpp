@@ -1,9 +1,9 @@
-#include "hapfluid/sim_vulkan/buffer.hpp"
+#include "hapfluid/vk/buffer.hpp"
 
 #include <cstring>
 #include <utility>
 
-namespace hapfluid::sim::vulkan {
+namespace hapfluid::vk {
 namespace {
 
 // First memory type allowed by `type_bits` that has all of `required` (and, if possible, all of
@@ -54,9 +54,16 @@ Buffer::Buffer(Context& context, VkDeviceSize bytes, VkBufferUsageFlags usage, M
     release();
     check(r, ("vkAllocateMemory (" + std::to_string(req.size) + " bytes)").c_str());
   }
-  check(vkBindBufferMemory(context.device(), buffer_, memory_, 0), "vkBindBufferMemory");
-  if ((props.memoryTypes[type].propertyFlags & host) == host)
-    check(vkMapMemory(context.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
+  // A constructor that throws runs no destructor: free what exists before saying why.
+  VkResult bound = vkBindBufferMemory(context.device(), buffer_, memory_, 0);
+  if (bound == VK_SUCCESS && (props.memoryTypes[type].propertyFlags & host) == host) {
+    bound = vkMapMemory(context.device(), memory_, 0, VK_WHOLE_SIZE, 0, &mapped_);
+    if (bound != VK_SUCCESS) mapped_ = nullptr;
+  }
+  if (bound != VK_SUCCESS) {
+    release();
+    check(bound, "vkBindBufferMemory / vkMapMemory");
+  }
 }
 
 Buffer::~Buffer() { release(); }
@@ -143,4 +150,4 @@ TexelView& TexelView::operator=(TexelView&& o) noexcept {
   return *this;
 }
 
-}  // namespace hapfluid::sim::vulkan
+}  // namespace hapfluid::vk
