@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes hapfluid/c_constants.py: the bit flags of the C and C++ headers that Python reads in
-traces, device logs and frames, as enum.IntFlag classes. The build runs it whenever a header
-changes (scripts/CMakeLists.txt), so Python never holds a hand-copied value.
+traces, device logs and frames, as enum.IntFlag classes. CMake runs it at configure time and the
+build whenever a header changes (the top-level CMakeLists.txt), so Python never holds a
+hand-copied value.
 
     gen_c_constants.py SOURCE_DIR OUT_FILE
 

@@ -57,7 +57,16 @@ if [ ${#missing[@]} -gt 0 ]; then
   apt=(apt-get -o DPkg::Lock::Timeout=600)
   # A stale or empty package list makes apt say "unable to locate": refresh once, then install.
   if ! "${apt[@]}" install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1; then
-    "${apt[@]}" update -q >/tmp/hapfluid-apt-update.log 2>&1 || { cat /tmp/hapfluid-apt-update.log >&2; exit 1; }
+    # The lock timeout covers dpkg's locks, not the package lists' lock that update takes: wait
+    # for that one here (10 min at most), and fail at once on any other error.
+    for attempt in $(seq 60); do
+      "${apt[@]}" update -q >/tmp/hapfluid-apt-update.log 2>&1 && break
+      if ! grep -q "Could not get lock" /tmp/hapfluid-apt-update.log || [ "$attempt" = 60 ]; then
+        cat /tmp/hapfluid-apt-update.log >&2
+        exit 1
+      fi
+      sleep 10
+    done
     "${apt[@]}" install -y -q --no-install-recommends "${missing[@]}" >/tmp/hapfluid-apt.log 2>&1 \
       || { tail -n 30 /tmp/hapfluid-apt.log >&2; echo "install-deps: apt-get install failed (log: /tmp/hapfluid-apt.log)" >&2; exit 1; }
   fi

@@ -20,9 +20,10 @@ def pytest_configure(config):
 
 
 def pytest_collection_modifyitems(config, items):
+    tests = SOURCE_DIR / "tests"
     for item in items:
-        folder = pathlib.Path(str(item.fspath)).resolve().relative_to(SOURCE_DIR / "tests").parts[0]
-        if folder in SLOW_FOLDERS:
+        path = pathlib.Path(str(item.fspath)).resolve()
+        if path.is_relative_to(tests) and path.relative_to(tests).parts[0] in SLOW_FOLDERS:
             item.add_marker(pytest.mark.slow)
 
 

@@ -68,7 +68,10 @@ int main(int argc, char** argv) {
       }
     } catch (const ConfigError& error) {
       ++bad;
-      for (const auto& p : error.problems()) std::fprintf(stderr, "%s\n", p.to_string().c_str());
+      // One message per file: its problems, one per line (each at error priority in the journal).
+      hapfluid::log::Line message(hapfluid::log::Level::error);
+      const char* separator = "";
+      for (const auto& p : error.problems()) message << separator << p.to_string(), separator = "\n";
     }
   }
   if (bad) hapfluid::log::error("%d of %zu files have errors", bad, files.size());

@@ -32,7 +32,8 @@ import numpy as np
 
 from .c_constants import LoopFlag
 from .paths import ROOT as SOURCE_DIR
-DEGRADED_FLAGS = {0: "no SCHED_FIFO", 1: "memory not locked", 2: "not pinned to its CPU"}
+DEGRADED_FLAGS = {LoopFlag.no_fifo: "no SCHED_FIFO", LoopFlag.no_mlock: "memory not locked",
+                  LoopFlag.no_affinity: "not pinned to its CPU"}
 NOT_PREEMPT_RT = LoopFlag.not_preempt_rt
 
 
@@ -100,7 +101,7 @@ def summarize(trace: dict, skip_ms: float = 200.0) -> dict:
         "sim_sample_age_us": percentiles(sim_age),
         "deadline_misses": deadline_misses,
         "overruns": overruns,
-        "degraded": [name for bit, name in DEGRADED_FLAGS.items() if flags & (1 << bit)],
+        "degraded": [name for bit, name in DEGRADED_FLAGS.items() if flags & bit],
         "preempt_rt": not (flags & NOT_PREEMPT_RT),
         "devices": devices,
     }

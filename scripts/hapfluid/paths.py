@@ -1,21 +1,35 @@
-"""Where the package finds the project's data: the checkout it lives in (an editable install in the
-project venv), or the data folder of an installed package."""
+"""Where the package finds the project's data: the checkout it lives in (the editable install of
+the project venv, or HAPFLUID_ROOT naming a checkout), else what `make install` put under
+<prefix>/share/hapfluid (scenes/, rigs/, meshes/, hapfluid.dbc)."""
 import os
 import pathlib
 
 _CHECKOUT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def _root() -> pathlib.Path:
+def _checkout():
     override = os.environ.get("HAPFLUID_ROOT")
     if override:
         return pathlib.Path(override)
-    if (_CHECKOUT / "config" / "scenes").is_dir():
-        return _CHECKOUT
-    return pathlib.Path("/usr/share/hapfluid")
+    return _CHECKOUT if (_CHECKOUT / "config" / "scenes").is_dir() else None
 
 
-ROOT = _root()
-SCENES = ROOT / "config" / "scenes"
-RIGS = ROOT / "config" / "rigs"
-DBC = ROOT / "firmware_bridge" / "dbc" / "hapfluid.dbc"
+def _installed_data():
+    for prefix in ("/usr", "/usr/local"):
+        data = pathlib.Path(prefix) / "share" / "hapfluid"
+        if (data / "scenes").is_dir():
+            return data
+    return None
+
+
+_root = _checkout()
+if _root is not None:
+    # ROOT: builds and outputs are found and written under the checkout.
+    ROOT = _root
+    SCENES, RIGS = ROOT / "config" / "scenes", ROOT / "config" / "rigs"
+    DBC = ROOT / "firmware_bridge" / "dbc" / "hapfluid.dbc"
+else:
+    # Installed: outputs go under the working directory, data comes from the install.
+    ROOT = pathlib.Path.cwd()
+    _data = _installed_data() or pathlib.Path("/usr/local/share/hapfluid")
+    SCENES, RIGS, DBC = _data / "scenes", _data / "rigs", _data / "hapfluid.dbc"

@@ -62,3 +62,23 @@ def test_every_installed_distribution_is_at_its_pinned_version(source_dir):
     spec = pyproject(source_dir)
     wanted = [*spec["dependencies"], *(r for extra in spec["optional-dependencies"].values() for r in extra)]
     assert all(norm(re.match(r"[A-Za-z0-9._-]+", r).group()) in pins for r in wanted)
+
+
+def test_a_copy_outside_a_checkout_finds_data_by_hapfluid_root_or_writes_under_the_working_directory(source_dir,
+                                                                                                    tmp_path):
+    import shutil
+    shutil.copytree(source_dir / "scripts" / "hapfluid", tmp_path / "site" / "hapfluid",
+                    ignore=shutil.ignore_patterns("__pycache__"))
+    code = "from hapfluid import paths; print(paths.ROOT); print(paths.SCENES); print(paths.DBC)"
+    env = {"PATH": "/usr/bin:/bin", "PYTHONPATH": str(tmp_path / "site")}
+    named = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path,
+                           env={**env, "HAPFLUID_ROOT": str(source_dir)})
+    assert named.returncode == 0, named.stderr
+    assert named.stdout.split("\n")[:3] == [str(source_dir), str(source_dir / "config" / "scenes"),
+                                            str(source_dir / "firmware_bridge" / "dbc" / "hapfluid.dbc")]
+    alone = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, cwd=tmp_path,
+                           env=env)
+    assert alone.returncode == 0, alone.stderr
+    root, scenes, dbc = alone.stdout.split("\n")[:3]
+    assert root == str(tmp_path)  # outputs under the working directory, never in the install
+    assert scenes.endswith("share/hapfluid/scenes") and dbc.endswith("share/hapfluid/hapfluid.dbc")
