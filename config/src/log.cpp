@@ -17,11 +17,10 @@ namespace {
 struct State {
   std::atomic<int> level{static_cast<int>(Level::info)};
   bool journal = false;
-  std::mutex tool_mutex;  // set_tool runs once at start-up; write copies the name under it
-  std::string tool;
   std::string bad_environment;  // HAPFLUID_LOG_LEVEL's text when it names no level
   std::atomic<bool> said_bad_environment{false};
-  std::mutex capture_mutex;
+  std::mutex mutex;  // guards the three below: the tool is set at start-up, a capture by tests
+  std::string tool;
   bool capturing = false;
   std::string captured;
 
@@ -98,7 +97,7 @@ const char* level_names() { return "error, warning, notice, info, debug"; }
 void set_tool(std::string_view tool) {
   State& s = state();
   {
-    std::lock_guard lock(s.tool_mutex);
+    std::lock_guard lock(s.mutex);
     s.tool.assign(tool);
   }
   // Said once the message can name its tool.
@@ -110,7 +109,6 @@ void set_tool(std::string_view tool) {
 void set_level(Level level) { state().level = static_cast<int>(level); }
 Level level() { return static_cast<Level>(state().level.load()); }
 bool enabled(Level level) { return static_cast<int>(level) <= state().level.load(std::memory_order_relaxed); }
-bool to_journal() { return state().journal; }
 
 std::string detail::format(Level level, std::string_view tool, bool journal, std::string_view message) {
   while (!message.empty() && message.back() == '\n') message.remove_suffix(1);
@@ -133,38 +131,34 @@ std::string detail::format(Level level, std::string_view tool, bool journal, std
 void write(Level level, std::string_view message) {
   if (!enabled(level)) return;
   State& s = state();
-  std::string tool;
+  std::string bytes;
   {
-    std::lock_guard lock(s.tool_mutex);
-    tool = s.tool;
-  }
-  std::string bytes = detail::format(level, tool, s.journal, message);
-  {
-    std::lock_guard lock(s.capture_mutex);
+    std::lock_guard lock(s.mutex);
+    bytes = detail::format(level, s.tool, s.journal, message);
     if (s.capturing) {
       s.captured += bytes;
       return;
     }
   }
-  write_all(bytes);
+  write_all(bytes);  // outside the lock: one write(2) keeps the line whole
 }
 
 Capture::Capture() {
   State& s = state();
-  std::lock_guard lock(s.capture_mutex);
+  std::lock_guard lock(s.mutex);
   s.capturing = true;
   s.captured.clear();
 }
 
 Capture::~Capture() {
   State& s = state();
-  std::lock_guard lock(s.capture_mutex);
+  std::lock_guard lock(s.mutex);
   s.capturing = false;
 }
 
 std::string Capture::text() const {
   State& s = state();
-  std::lock_guard lock(s.capture_mutex);
+  std::lock_guard lock(s.mutex);
   return s.captured;
 }
 

@@ -56,7 +56,6 @@ TEST(VulkanContext, AGraphicsContextIsVulkan13WithAGraphicsAndComputeQueue) {
 
 TEST(VulkanContext, GpuTimerMeasuresPassesOnAComputeContext) {
   hv::Context context(validated());
-  if (!context.timestamps_supported()) GTEST_SKIP() << context.description().name << " has no timestamps";
   hapfluid::vk::GpuTimer timer(context);
   hv::Buffer buffer(context, 1 << 20, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, hv::MemoryUse::device);
   context.run_once([&](VkCommandBuffer cb) {
@@ -69,7 +68,9 @@ TEST(VulkanContext, GpuTimerMeasuresPassesOnAComputeContext) {
   });
   std::array<double, hapfluid::vk::GpuTimer::capacity - 1> ms{};
   std::uint32_t count = 0;
-  ASSERT_TRUE(timer.intervals_ms(ms, count));
+  // A device without timestamps (lavapipe has them) gets no intervals, and says so.
+  ASSERT_EQ(timer.intervals_ms(ms, count), context.timestamps_supported()) << context.description().name;
+  if (!context.timestamps_supported()) return;
   ASSERT_EQ(count, 2u);
   EXPECT_GE(ms[0], 0.0);
   EXPECT_GE(ms[1], 0.0);

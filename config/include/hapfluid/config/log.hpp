@@ -29,8 +29,6 @@ void set_tool(std::string_view tool);
 void set_level(Level level);
 Level level();
 bool enabled(Level level);
-// stderr is the journal's stream: $JOURNAL_STREAM names its device and inode.
-bool to_journal();
 
 // One message; it may span lines (the journal gets the priority on each of them).
 void write(Level level, std::string_view message);
