@@ -71,7 +71,7 @@ bool HapticArm::accept_state_sequence(std::uint16_t seq) {
   return true;
 }
 
-void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks) {
+void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks, std::uint64_t now_ns) {
   // The echo names the newest command the device applied (low 8 bits). When it moves on by more
   // than the device ticks since the last state we got (states lost on the way are ticks too), the
   // commands between never reached the motors: lost on the link, or superseded in one device
@@ -96,7 +96,14 @@ void HapticArm::count_lost_commands(std::uint8_t echo, std::uint32_t device_tick
   const auto advance = static_cast<std::uint8_t>(echo - last_echo_);
   if (ours && last_echo_ours_ && advance > device_ticks && advance < kRecent)
     health_.commands_lost += advance - device_ticks;
-  if (ours && (advance != 0 || !last_echo_ours_)) health_.commands_sent_when_heard = health_.commands_sent;
+  if (ours && (advance != 0 || !last_echo_ours_)) {
+    health_.commands_sent_when_heard = health_.commands_sent;
+    // That state left the device after the command reached it, so its age here is at most this
+    // round trip. A steady delay on the link shows here, not in the gaps between states.
+    const std::uint64_t sent = sent_ns_[echo];
+    health_.echo_round_trip_ns = now_ns > sent ? now_ns - sent : 0;
+    health_.echo_round_trips++;
+  }
   last_echo_ = echo;
   last_echo_ours_ = ours;
 }
@@ -111,7 +118,7 @@ void HapticArm::handle(const hf_message& m, std::uint64_t now_ns, bool& updated)
       latest_.device_time_us = s.device_time_us;
       latest_.sequence = m.seq;
       latest_.command_echo = s.command_echo;
-      count_lost_commands(s.command_echo, state_seq_.gaps - gaps_before + 1);
+      count_lost_commands(s.command_echo, state_seq_.gaps - gaps_before + 1, now_ns);
       for (int i = 0; i < 3; ++i) {
         latest_.position_m[i] = s.position_m[i];
         latest_.linear_velocity_m_s[i] = s.linear_velocity_m_s[i];
@@ -192,6 +199,8 @@ bool HapticArm::send(const DeviceCommand& command) {
   }
   c.flags = static_cast<std::uint8_t>((command.enable ? HF_CMD_ENABLE : 0) | (command.estop ? HF_CMD_ESTOP : 0) |
                                       (command.clear_faults ? HF_CMD_CLEAR_FAULTS : 0));
+  const std::uint64_t now = monotonic_ns();
+  sent_ns_[command_seq_ & 0xffu] = now;
   bool ok = link_->send(m);
   if (!ok && link_->last_encode_result() != HF_OK) {
     // Not representable (non-finite or beyond full scale): the safety layer failed upstream.
@@ -212,7 +221,6 @@ bool HapticArm::send(const DeviceCommand& command) {
   if (ok) health_.commands_sent++;
   else health_.send_errors++;
 
-  const std::uint64_t now = monotonic_ns();
   if (now >= next_heartbeat_ns_) {
     hf_message h;
     std::memset(&h, 0, sizeof h);

@@ -148,9 +148,12 @@ int main(int argc, char** argv) {
             (unsigned long long)supervisor->flight_dumps());
   for (std::size_t i = 0; i < loop->device_count(); ++i) {
     const auto& q = loop->link_quality(i);
-    log::info("device \"%s\": link quality %.4f fresh (%llu/%llu ticks), longest miss run %u ticks",
+    log::info("device \"%s\": link quality %.4f fresh (%llu/%llu ticks), longest miss run %u ticks%s",
               loop->device_name(i), q.fresh_share(), (unsigned long long)q.fresh_ticks, (unsigned long long)q.ticks,
-              q.longest_miss_run);
+              q.longest_miss_run,
+              q.round_trips ? (", command round trip " + std::to_string(q.round_trip_ms) + " ms (longest " +
+                               std::to_string(q.longest_round_trip_ms) + " ms)").c_str()
+                            : "");
   }
   g_loop = nullptr;
   return 0;

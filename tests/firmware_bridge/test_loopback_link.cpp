@@ -188,6 +188,43 @@ TEST_P(EveryFraming, CommandsTheDeviceNeverAppliedAreCountedFromItsEcho) {
   EXPECT_EQ(rig.arm->health().commands_lost, 24u);
 }
 
+TEST_P(EveryFraming, TheEchoTimesEachCommandsRoundTripOnTheHostsClock) {
+  // Each state whose echo moves on to one of our commands times that command: from its send to
+  // the poll that received the state. A device that holds its states back shows as a long round
+  // trip although they keep coming one per tick. Bounds from the host's own clock around the
+  // calls, so the checks hold however slowly this machine runs.
+  Rig rig(GetParam(), "round-trip");
+  device::DeviceState state;
+  for (int tick = 0; tick < 5; ++tick) {  // the echo moves on to ours
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+  }
+  for (int tick = 0; tick < 20; ++tick) {
+    const std::uint64_t before = rig.arm->health().echo_round_trips;
+    const std::uint64_t t0 = device::monotonic_ns();
+    rig.arm->send(device::DeviceCommand{});
+    rig.device_tick();
+    rig.arm->poll(state);
+    const std::uint64_t t1 = device::monotonic_ns();
+    ASSERT_EQ(rig.arm->health().echo_round_trips, before + 1) << "tick " << tick;
+    EXPECT_LE(rig.arm->health().echo_round_trip_ns, t1 - t0) << "tick " << tick;
+  }
+  // The device takes the command at once but sends the state that echoes it 20 ms later.
+  const std::uint64_t held_ns = 20'000'000;
+  const std::uint64_t t0 = device::monotonic_ns();
+  rig.arm->send(device::DeviceCommand{});
+  rig.device_tick(/*send_state=*/false);
+  while (device::monotonic_ns() < t0 + held_ns) rig.arm->poll(state);  // nothing echoes it meanwhile
+  const std::uint64_t before = rig.arm->health().echo_round_trips;
+  rig.device_tick();
+  rig.arm->poll(state);
+  const std::uint64_t t1 = device::monotonic_ns();
+  ASSERT_EQ(rig.arm->health().echo_round_trips, before + 1);
+  EXPECT_GE(rig.arm->health().echo_round_trip_ns, held_ns);
+  EXPECT_LE(rig.arm->health().echo_round_trip_ns, t1 - t0);
+}
+
 TEST_P(EveryFraming, TheEchoSaysHowManyOfOurCommandsTheDeviceHasNotBeenSeenToTake) {
   // A device that takes every command echoes each in its next state: nothing outstanding beyond
   // the one in flight. One that stops reading (its commands discarded unread) keeps sending

@@ -19,7 +19,7 @@ import can
 import numpy as np
 
 from hil_stack import (FAULT_COMMUNICATION_CONSTRAINTS, FAULT_DEVICE_NOT_LISTENING, FAULT_DEVICE_REPORTED, FAULT_ESTOP,
-                       FAULT_FOREIGN_COMMAND, FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, FLAG_FORCE_NORM_LIMITED, FLAG_HARD_ZERO,
+                       FAULT_FOREIGN_COMMAND, FAULT_LINK_LATENCY, FAULT_LINK_TIMEOUT, FAULT_SIM_STALE, FLAG_FORCE_NORM_LIMITED, FLAG_HARD_ZERO,
                        FLAG_NONFINITE_INPUT, FLAG_SIM_STALE_RAMP, FLAG_TORQUE_NORM_LIMITED, LINK_FAULTS, Stack,
                        TraceFollower, engaged, force, read_csv)
 from hapfluid.c_constants import DeviceFault
@@ -47,8 +47,9 @@ BAD_COMMAND_SETS = 20
 HF_FAULT_BAD_COMMANDS = DeviceFault.BAD_COMMANDS
 DROP_PROBABILITY = 0.8  # of the device's STATEs: gaps beyond link_timeout_ms come every few ms
 # Every device message, from the injection on: five times link_timeout_ms. The link timeout sees
-# the gap the delay opens only at a tick inside it: a loop woken late through most of a gap just
-# twice the timeout misses it, and the stream then flows, late (docs/fault-matrix.md).
+# the gap the delay opens only at a tick inside it (a loop woken late through most of a gap just
+# twice the timeout misses it); the late stream that follows is the command round trip's to see
+# (docs/fault-matrix.md).
 DELAY_MS = 25
 
 
@@ -311,6 +312,18 @@ def link_clears(run):
                and not int(r["d0_faults"]) & LINK_FAULTS)
 
 
+def latency_holds(run):
+    """Once the delayed stream flows, every state echoes a command DELAY_MS old: the loop says
+    link_latency and keeps the hand at zero for as long as the delay lasts (to the run's end)."""
+    rows = [r for r in read_csv(run.stack.dir / "rt-trace.csv") if r["scheduled_ns"] >= run.triggered_ns]
+    late = [i for i, r in enumerate(rows) if int(r["d0_faults"]) & FAULT_LINK_LATENCY]
+    assert late, "the delayed stream never showed as link_latency"
+    after = rows[late[0]:]
+    assert all(int(r["d0_faults"]) & FAULT_LINK_LATENCY for r in after), "link_latency cleared while the delay lasted"
+    assert all(force(r) == 0 for r in after)
+    return {"link_latency_ms": round((rows[late[0]]["scheduled_ns"] - run.triggered_ns) * 1e-6, 1)}
+
+
 def rebooted_device_engages(run):
     link_clears(run)
     wait_engaged(run, device="fake-hand2")
@@ -425,8 +438,9 @@ MATRIX = [
           "zero; link_timeout", device_args=("--drop-probability", str(DROP_PROBABILITY)),
           **{**LINK_TIMEOUT, "instant": last_state_before_a_timeout}),
     Fault("device_frame_delay", f"every device message delayed {DELAY_MS} ms (--delay-ms {DELAY_MS})",
-          "zero; link_timeout, until the delayed stream has been steady for link_recover_ms",
-          holds="clears", recover=link_clears, device_args=("--delay-ms", str(DELAY_MS)), **LINK_TIMEOUT),
+          "zero; link_timeout at the gap, then link_latency for as long as the delay lasts",
+          device_args=("--delay-ms", str(DELAY_MS)), check=latency_holds,
+          **{**LINK_TIMEOUT, "fault_bits": FAULT_LINK_TIMEOUT | FAULT_LINK_LATENCY}),
     Fault("device_bus_off", "a CAN bus-off error frame, then 200 ms silent both ways (--bus-off-at 0)",
           "host: zero, device_reported; device: motors off by its watchdog", **DEVICE, bound=AT_ONCE,
           fault_bits=FAULT_DEVICE_REPORTED, flags=FLAG_HARD_ZERO, device_zero="watchdog", holds="clears",

@@ -23,6 +23,8 @@ class FaultyDevice final : public device::Device {
   bool echoes = false;         // health().echoes_commands: its states echo the commands it took
   bool deaf = false;           // ... and it has stopped taking them
   std::uint64_t sent = 0, heard = 0;
+  std::uint64_t round_trip_ns = 0;  // > 0: each command heard is echoed this long after its send
+  std::uint64_t round_trips = 0;
   bool silent = false;
   device::DeviceCommand last{};
   bool poll(device::DeviceState& out) override {
@@ -30,6 +32,7 @@ class FaultyDevice final : public device::Device {
     out = {};
     out.host_receive_ns = shm::monotonic_ns();
     out.fault = fault;
+    if (echoes && !deaf && round_trip_ns && sent) ++round_trips;  // this state echoes the newest command
     return true;
   }
   bool send(const device::DeviceCommand& c) override {
@@ -47,6 +50,8 @@ class FaultyDevice final : public device::Device {
     h.echoes_commands = echoes;
     h.commands_sent = sent;
     h.commands_sent_when_heard = heard;
+    h.echo_round_trip_ns = round_trip_ns;
+    h.echo_round_trips = round_trips;
     return h;
   }
   const char* name() const override { return "faulty"; }
@@ -206,6 +211,27 @@ TEST(LoopDeviceFaults, ADeviceThatKeepsTalkingButStopsHearingUsIsALinkFaultUntil
             "device_not_listening");
   l.device->deaf = false;  // it hears again
   EXPECT_TRUE(l.tick_until([&] { return !not_listening(); })) << "a link fault recovers once the device listens again";
+}
+
+TEST(LoopDeviceFaults, ADeviceWhoseEchoComesBackLateIsALinkFaultUntilItComesBackInTime) {
+  // Fresh states every tick, each echoing a command sent 25 ms before (a delay on the link):
+  // the loop hands each round trip to the safety layer, which disables the device and says why,
+  // and the loop's link report keeps the longest. (Engaged first on the real clock, as above.)
+  LoopWithOneDevice l;
+  l.device->echoes = true;
+  l.device->round_trip_ns = 1'000'000;
+  auto latency = [&] { return (l.loop->last_trace().devices[0].faults & safety::fault_link_latency) != 0; };
+  l.tick_until([&] { return l.device->last.enable; });
+  ASSERT_TRUE(l.device->last.enable) << safety::fault_names(l.loop->last_trace().devices[0].faults);
+  EXPECT_FALSE(latency());
+  l.device->round_trip_ns = 25'000'000;
+  EXPECT_TRUE(l.tick_until(latency));
+  EXPECT_FALSE(l.device->last.enable);
+  EXPECT_EQ(l.loop->link_quality(0).round_trip_ms, 25.0);
+  EXPECT_EQ(l.loop->link_quality(0).longest_round_trip_ms, 25.0);
+  EXPECT_EQ(l.loop->link_quality(0).round_trips, l.device->round_trips);
+  l.device->round_trip_ns = 1'000'000;
+  EXPECT_TRUE(l.tick_until([&] { return !latency(); })) << "a link fault recovers once the echo is back in time";
 }
 
 TEST(LoopDeviceFaults, ADeviceWithoutACommandEchoIsNeverJudgedDeaf) {

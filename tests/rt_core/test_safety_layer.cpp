@@ -43,6 +43,7 @@ struct Harness {
     in.estop_input = estop;
     in.sim_restarted = sim_fresh && sim_restarted;
     if (sim_fresh) sim_restarted = false;
+    if (fresh_frame) in.echo_round_trip_ms = round_trip_ms;
     return layer.step(in);
   }
   // Runs until engaged at `command` (link recovery 100 ms, small for 50 ms, then the engage ramp
@@ -56,6 +57,7 @@ struct Harness {
   bool estop = false;
   bool sim_restarted = false;  // the next fresh sample comes from a new sim
   std::uint64_t late_ns = 0;   // the next tick wakes this much late (an overrun)
+  double round_trip_ms = -1;   // each fresh frame's command round trip (negative: a device without echo)
 };
 
 double max_abs_change(const Wrench& a, const Wrench& b) { return norm(a.force_n - b.force_n); }
@@ -246,6 +248,57 @@ TEST(SafetyLayer, ALoopThatLooksTooSeldomFaultsTheLinkOnceTheDevicesOwnWatchdogH
   EXPECT_GT(silent_ms, h.config.device_watchdog_ms);
   EXPECT_LE(silent_ms, h.config.device_watchdog_ms + 8);
   EXPECT_EQ(out.wrench, Wrench{});
+}
+
+TEST(SafetyLayer, ASteadyDelayOnTheLinkIsALinkFaultThoughItsFramesKeepTheirRate) {
+  // Every frame arrives on time, one per tick, but each echoes a command sent 25 ms before: the
+  // poses are 25 ms old. Once link_timeout_ms (5) of round trips were all too long the output is
+  // zero, and it stays zero for as long as the delay lasts.
+  Harness h;
+  h.round_trip_ms = 1.2;
+  SafetyOutput out = h.settle({{3, 0, 0}, {}});
+  ASSERT_NEAR(out.wrench.force_n.x, 3.0, 1e-9);
+  ASSERT_FALSE(out.faults);
+  h.round_trip_ms = 25;
+  int fault_tick = -1;
+  for (int k = 0; k < 500; ++k) {
+    out = h.tick({{3, 0, 0}, {}});
+    if (fault_tick < 0 && (out.faults & fault_link_latency)) fault_tick = k;
+    if (fault_tick >= 0) EXPECT_EQ(out.wrench, Wrench{}) << "tick " << k;
+  }
+  EXPECT_GE(fault_tick, 4) << "not before link_timeout_ms of slow round trips";
+  EXPECT_LE(fault_tick, 6) << "within link_timeout_ms + 1 tick";
+  EXPECT_FALSE(out.enable);
+  EXPECT_EQ(fault_names(out.faults), "link_latency");
+  // The delay ends: the link recovers like after any link fault, link_recover_ms later.
+  h.round_trip_ms = 1.2;
+  int clear_tick = -1;
+  for (int k = 0; k < 200 && clear_tick < 0; ++k)
+    if (!(h.tick({{0.1, 0, 0}, {}}).faults & fault_link_latency)) clear_tick = k;
+  EXPECT_GE(clear_tick, h.config.link_recover_ms - 1);
+  EXPECT_LE(clear_tick, h.config.link_recover_ms + 1);
+}
+
+TEST(SafetyLayer, SlowRoundTripsNowAndThenAreNoLinkFault) {
+  // A loop or a device that woke late makes one round trip long (the device applies the newest
+  // command it has, so the next is short again), and a device without an echo measures none.
+  Harness h;
+  h.round_trip_ms = 1.2;
+  SafetyOutput out = h.settle({{3, 0, 0}, {}});
+  for (int k = 0; k < 1000; ++k) {
+    h.round_trip_ms = k % 4 == 0 ? 1.1 : 30;  // three in four slow, never link_timeout_ms of them on end
+    out = h.tick({{3, 0, 0}, {}});
+    ASSERT_FALSE(out.faults) << "tick " << k;
+  }
+  EXPECT_NEAR(out.wrench.force_n.x, 3.0, 1e-9);
+  // Four slow on end, then no more measurements: too few to judge the link by.
+  h.round_trip_ms = 1.1;
+  h.tick({{3, 0, 0}, {}});
+  h.round_trip_ms = 30;
+  for (int k = 0; k < 4; ++k) out = h.tick({{3, 0, 0}, {}});
+  h.round_trip_ms = -1;
+  for (int k = 0; k < 3; ++k) out = h.tick({{3, 0, 0}, {}});
+  EXPECT_FALSE(out.faults & fault_link_latency);
 }
 
 TEST(SafetyLayer, InvalidDeviceStateIsALinkFault) {

@@ -2,6 +2,7 @@
 
 #include <time.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -59,6 +60,7 @@ RtLoop::RtLoop(const config::Rig& rig, std::vector<std::unique_ptr<device::Devic
     const device::DeviceHealth health = devices_.back()->device->health();
     devices_.back()->device_restarts = health.device_restarts;
     devices_.back()->commands_lost = health.commands_lost;
+    devices_.back()->echo_round_trips = health.echo_round_trips;
     auto& entry = states_record_.devices[i];
     std::strncpy(entry.name, rig.devices[i].name.c_str(), sizeof entry.name - 1);
     entry.present = 1;
@@ -176,6 +178,14 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   in.foreign_command = foreign;
   in.commands_lost = lost;
   in.commands_unheard = health.echoes_commands && d.fresh && unheard_long;
+  if (health.echo_round_trips != d.echo_round_trips) {
+    d.echo_round_trips = health.echo_round_trips;
+    in.echo_round_trip_ms = double(health.echo_round_trip_ns) * 1e-6;
+    LinkQuality& q = d.link;
+    ++q.round_trips;
+    q.round_trip_ms = in.echo_round_trip_ms;
+    q.longest_round_trip_ms = std::max(q.longest_round_trip_ms, in.echo_round_trip_ms);
+  }
   in.sim_age_ms = sim_age_ms(now);
   in.sim_restarted = d.sim_restarted;
   d.sim_restarted = false;

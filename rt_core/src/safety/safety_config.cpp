@@ -100,8 +100,8 @@ std::string flag_names(std::uint32_t flags) {
 std::string fault_names(std::uint32_t faults) {
   static const char* const table[] = {"estop",     "link_timeout", "link_invalid", "device_reported",
                                       "sim_stale", "foreign_command", "communication_constraints_violation",
-                                      "device_not_listening"};
-  return names(faults, table, 8);
+                                      "device_not_listening", "link_latency"};
+  return names(faults, table, 9);
 }
 
 }  // namespace hapfluid::safety

@@ -24,14 +24,29 @@ void SafetyLayer::update_link(const SafetyInput& in) {
   bool timed_out = !seen_frame_ ||
                    (silent_ms > config_.link_timeout_ms && double(looks_without_frame_) > looks_needed) ||
                    silent_ms > std::max(config_.link_timeout_ms, config_.device_watchdog_ms);
-  bool healthy_now = !timed_out && in.state_valid && !in.device_fault && !in.commands_unheard;
+  // A steady delay keeps the frames coming at their rate, pose after stale pose. The round trip
+  // of our commands bounds how old they are. One slow round trip is a tick the loop or the device
+  // woke late (the device applies the newest command it has, so a stall of its own does not
+  // lengthen the next one); a whole link timeout of them, every one slow, is the link.
+  if (in.echo_round_trip_ms >= 0) {
+    if (in.echo_round_trip_ms <= config_.link_timeout_ms) {
+      slow_echoes_ = 0;
+    } else if (slow_echoes_++ == 0) {
+      slow_echo_since_ns_ = in.now_ns;
+    }
+  }
+  const bool late = double(slow_echoes_) >= looks_needed &&
+                    double(in.now_ns - slow_echo_since_ns_) >= config_.link_timeout_ms * kNsPerMs;
+  bool healthy_now = !timed_out && in.state_valid && !in.device_fault && !in.commands_unheard && !late;
   if (healthy_now && !healthy_) healthy_since_ns_ = in.now_ns;
   healthy_ = healthy_now;
 
-  std::uint32_t link_bits = fault_link_timeout | fault_link_invalid | fault_device_reported | fault_device_not_listening;
+  std::uint32_t link_bits =
+      fault_link_timeout | fault_link_invalid | fault_device_reported | fault_device_not_listening | fault_link_latency;
   if (!healthy_now) {
     if (timed_out) faults_ |= fault_link_timeout;
     if (in.commands_unheard) faults_ |= fault_device_not_listening;
+    if (late) faults_ |= fault_link_latency;
     if (!in.state_valid) faults_ |= fault_link_invalid;
     if (in.device_fault) faults_ |= fault_device_reported;
   } else if ((faults_ & link_bits) &&

@@ -49,6 +49,10 @@ struct DeviceHealth {
   // commands_sent - commands_sent_when_heard is how many the device has not been seen to take.
   bool echoes_commands = false;
   std::uint64_t commands_sent_when_heard = 0;
+  // From the send of the command that the newest echo moved on to, to the state that carried the
+  // echo (the host's clock, at its poll). echo_round_trips counts the measurements.
+  std::uint64_t echo_round_trip_ns = 0;
+  std::uint64_t echo_round_trips = 0;
   bool connected = false;
 };
 

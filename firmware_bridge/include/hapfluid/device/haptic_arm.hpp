@@ -32,8 +32,9 @@ class HapticArm final : public Device {
   // STATE sequence check; takes up a device whose counter restarted (health().device_restarts).
   bool accept_state_sequence(std::uint16_t seq);
   // Counts the commands the device's echo skipped (health().commands_lost); `device_ticks`: the
-  // device's states since the last one received (1, or more when states were lost).
-  void count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks);
+  // device's states since the last one received (1, or more when states were lost). An echo that
+  // moved on to one of ours also times that command's round trip (health().echo_round_trip_ns).
+  void count_lost_commands(std::uint8_t echo, std::uint32_t device_ticks, std::uint64_t now_ns);
   // This many consecutive "older" states, each one after the other, mean a restarted counter.
   static constexpr std::uint32_t kRestartRun = 3;
 
@@ -53,6 +54,7 @@ class HapticArm final : public Device {
   bool has_info_ = false;
   std::uint32_t faults_ = 0;
   std::uint16_t command_seq_ = 0;
+  std::uint64_t sent_ns_[256] = {};  // when each command went out, by the low 8 bits the echo carries
   std::uint16_t heartbeat_seq_ = 0;
   std::uint16_t estop_seq_ = 0;
   std::uint64_t next_heartbeat_ns_ = 0;

@@ -34,6 +34,9 @@ struct LinkQuality {
   std::uint64_t fresh_ticks = 0;
   std::uint32_t miss_run = 0;
   std::uint32_t longest_miss_run = 0;
+  std::uint64_t round_trips = 0;      // commands whose echo came back (devices that echo them)
+  double round_trip_ms = 0;           // the newest of them
+  double longest_round_trip_ms = 0;
   double fresh_share() const { return ticks ? double(fresh_ticks) / double(ticks) : 0.0; }
 };
 
@@ -101,6 +104,7 @@ class RtLoop {
     std::uint32_t device_restarts = 0;  // health().device_restarts already taken as a link loss
     std::uint64_t foreign_commands = 0; // health().foreign_commands already latched
     std::uint64_t commands_lost = 0;    // health().commands_lost already counted
+    std::uint64_t echo_round_trips = 0; // health().echo_round_trips already handed to the safety layer
     bool sim_restarted = false;    // a new sim incarnation's first sample, not yet seen by the safety layer
     safety::Wrench scene_wrench;
   };

@@ -38,6 +38,10 @@ enum Fault : std::uint32_t {
   fault_device_not_listening = 1u << 7,  // the device keeps sending states but its command echo has
                                      // not followed our commands for device_watchdog_ms of them: it
                                      // is not hearing us; a link fault, recovers like one
+  fault_link_latency = 1u << 8,      // the device's states have echoed our commands later than
+                                     // link_timeout_ms after we sent them, link_timeout_ms on end:
+                                     // the poses they carry are that old; a link fault, recovers
+                                     // like one
 };
 
 // "force_norm_limited|rate_limited"; "-" for none.

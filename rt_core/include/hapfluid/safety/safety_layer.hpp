@@ -65,6 +65,8 @@ struct SafetyInput {
   std::uint32_t commands_lost = 0; // commands the device reported not applied since the last step
   bool commands_unheard = false;   // the device's echo has not followed our commands for
                                    // device_watchdog_ms of them while its states keep coming
+  double echo_round_trip_ms = -1;  // a command's round trip measured this tick (its echo's first
+                                   // state); negative: none
   double sim_age_ms = 1e300;       // time since the newest fresh sim sample arrived; huge: none yet
   bool sim_restarted = false;      // this tick's sample is the first from a new sim (or the first ever)
 };
@@ -114,6 +116,8 @@ class SafetyLayer {
   double lost_bucket_ = 0;         // lost commands, draining max_lost_commands per window
   std::uint64_t last_fresh_ns_ = 0;
   std::uint32_t looks_without_frame_ = 0;  // ticks since the last fresh frame
+  std::uint64_t slow_echo_since_ns_ = 0;   // first of the round trips beyond link_timeout_ms on end
+  std::uint32_t slow_echoes_ = 0;          // how many on end
   std::uint64_t last_now_ns_ = 0;
   std::uint64_t healthy_since_ns_ = 0;
   bool healthy_ = false;
