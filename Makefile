@@ -7,7 +7,9 @@
 #   make fuzz     fuzz every reader of untrusted input (clang, libFuzzer, ASan+UBSan in build-fuzz/),
 #                 RUNS executions per target (default 1000000), JSON in out/fuzz/fuzz.json
 #   make hil      ... and run the QEMU hardware-in-the-loop suite (KERNEL=rt: PREEMPT_RT kernel)
-#   make install  install binaries, config and systemd units (PREFIX=/usr/local)
+#   make install  install binaries, config, systemd units and the Python tools (PREFIX=/usr/local)
+#   make deb      ... and build the Debian package (out/deb/) and check it in a fresh Debian 12 chroot:
+#                 install, systemd-analyze verify, the default scene live, remove (NOCHECK=1: build only)
 #   make clean    remove build/, build-fuzz/ and out/
 SHELL := /bin/bash
 BUILD ?= build
@@ -22,7 +24,7 @@ PY := $(VENV)/bin/python
 JOBS ?= $(shell nproc)
 KERNEL ?= default
 
-.PHONY: all deps build test check run bench fuzz install clean hil
+.PHONY: all deps build test check run bench fuzz install deb clean hil
 
 all: build
 
@@ -58,6 +60,14 @@ fuzz: deps
 
 install: build
 	@cmake --install $(BUILD) --prefix $(PREFIX)
+
+# The package carries the build folder's binaries, installed under /usr (cmake/packaging.cmake).
+deb: build
+	@bash scripts/install-deps.sh deb
+	@rm -f out/deb/hapfluid_*.deb
+	@cd $(BUILD) && cpack -G DEB -B $(CURDIR)/out/deb >/dev/null
+	@echo "deb: $$(ls out/deb/hapfluid_*.deb)"
+	@$(if $(NOCHECK),true,$(PY) scripts/check_deb.py --deb $$(ls out/deb/hapfluid_*.deb) --out out/deb)
 
 hil: build
 	@$(PY) tests/hil-kernel/hil.py --build $(BUILD) --kernel $(KERNEL)

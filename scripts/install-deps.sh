@@ -7,6 +7,7 @@
 #   scripts/install-deps.sh hil        core + what the QEMU hardware-in-the-loop suite needs
 #   scripts/install-deps.sh bench      core + SPlisHSPlasH (PyPI wheel), the benchmarks' reference solver
 #   scripts/install-deps.sh fuzz       core + clang with libFuzzer and the symbolizer (make fuzz)
+#   scripts/install-deps.sh deb        core + mmdebstrap, for the package check in a Debian chroot (make deb)
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -26,6 +27,9 @@ debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
 # clang-14 (via clang) compiles the fuzzing build, libclang-rt-14-dev holds libFuzzer and the
 # sanitizer runtimes, llvm-14 the llvm-symbolizer that turns sanitizer reports into file:line.
 debian_fuzz=(clang libclang-rt-14-dev llvm-14)
+# A fresh Debian 12 root to install the package into (make deb); dpkg-shlibdeps, which CPack uses
+# for the package's library dependencies, comes with build-essential's dpkg-dev.
+debian_deb=(mmdebstrap)
 # Python: the hapfluid package (scripts/pyproject.toml) with its extras, every version pinned by
 # scripts/constraints.txt.
 python_extras=test
@@ -33,10 +37,11 @@ python_extras=test
 want=("${debian_core[@]}")
 [ "$group" = hil ] && want+=("${debian_hil[@]}")
 [ "$group" = fuzz ] && want+=("${debian_fuzz[@]}")
+[ "$group" = deb ] && want+=("${debian_deb[@]}")
 case "$group" in
-  core|hil|fuzz) ;;
+  core|hil|fuzz|deb) ;;
   bench) python_extras=test,bench ;;
-  *) echo "install-deps: unknown group '$group' (core, hil, bench or fuzz)" >&2; exit 2 ;;
+  *) echo "install-deps: unknown group '$group' (core, hil, bench, fuzz or deb)" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -17,7 +17,6 @@ import sys
 import time
 
 import can  # noqa: E402
-import cantools  # noqa: E402
 
 from .paths import DBC as DEFAULT_DBC
 from .proto import codec
@@ -118,7 +117,15 @@ def main(argv=None) -> int:
     p.add_argument("--quiet", action="store_true", help="no per-message output (with --stats)")
     args = p.parse_args(argv)
 
-    dbc = cantools.database.load_file(str(args.dbc)) if args.signals else None
+    dbc = None
+    if args.signals:
+        # Only --signals needs cantools, which Debian 12 does not package: the project venv has
+        # it; on an installed rig, `pip install cantools` (in a venv) adds it.
+        try:
+            import cantools
+        except ModuleNotFoundError:
+            p.error("--signals needs the cantools package, which this Python lacks (pip install cantools)")
+        dbc = cantools.database.load_file(str(args.dbc))
     decoder = Decoder(set(args.node) if args.node else None, dbc)
     if args.log:
         if not args.log.exists():

@@ -46,7 +46,7 @@ import tomli_w
 
 from . import latency_report  # cyclictest beside the loop, shared with latency_report --with-cyclictest
 
-from .paths import RIGS, ROOT, SCENES
+from .paths import BIN, RIGS, ROOT, SCENES
 SETTLE_S = 0.5  # the sim's time before the script starts below which its fluid has not settled
 
 
@@ -561,7 +561,8 @@ def main():
     run.add_argument("--rig", default=None, help="rig file (default: fake_single, fake_dual for two-hand scenes)")
     run.add_argument("--duration", type=float, default=None,
                      help="wall seconds from the start (default: the lead-in plus the scene's duration_s)")
-    run.add_argument("--build", default="build")
+    run.add_argument("--build", default=None,
+                     help="build folder whose bin/ to run (default: build/ of this checkout; installed: <prefix>/bin)")
     run.add_argument("--out", default=None, help="output folder (default: out/<scene>-<timestamp>)")
     run.add_argument("--windowed", action="store_true", help="render in a window instead of PNG frames")
     run.add_argument("--no-render", action="store_true", help="run without the renderer")
@@ -584,9 +585,11 @@ def main():
                           "scene, else the faster one, said in the sim's log and the summary; sim_gpu/live/README.md)")
     args = parser.parse_args()
 
-    build = pathlib.Path(args.build)
-    build = build if build.is_absolute() else (ROOT / build).resolve()
-    bin_dir = build / "bin"
+    if args.build is None:
+        bin_dir = BIN
+    else:
+        build = pathlib.Path(args.build)
+        bin_dir = (build if build.is_absolute() else (ROOT / build).resolve()) / "bin"
     scene_path = resolve_scene(args.scene)
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     out = pathlib.Path(args.out).resolve() if args.out else ROOT / "out" / f"{scene_path.stem}-{stamp}"

@@ -1,6 +1,7 @@
 """Where the package finds the project's data: the checkout it lives in (the editable install of
-the project venv, or HAPFLUID_ROOT naming a checkout), else what `make install` put under
-<prefix>/share/hapfluid (scenes/, rigs/, meshes/, hapfluid.dbc)."""
+the project venv, or HAPFLUID_ROOT naming a checkout), else what `make install` or the
+Debian package put under <prefix>/share/hapfluid (scenes/, rigs/, meshes/, hapfluid.dbc), with the
+binaries in <prefix>/bin."""
 import os
 import pathlib
 
@@ -28,8 +29,10 @@ if _root is not None:
     ROOT = _root
     SCENES, RIGS = ROOT / "config" / "scenes", ROOT / "config" / "rigs"
     DBC = ROOT / "firmware_bridge" / "dbc" / "hapfluid.dbc"
+    BIN = ROOT / "build" / "bin"  # the default build folder's (make)
 else:
     # Installed: outputs go under the working directory, data comes from the install.
     ROOT = pathlib.Path.cwd()
     _data = _installed_data() or pathlib.Path("/usr/local/share/hapfluid")
     SCENES, RIGS, DBC = _data / "scenes", _data / "rigs", _data / "hapfluid.dbc"
+    BIN = _data.parents[1] / "bin"  # <prefix>/bin beside <prefix>/share/hapfluid
