@@ -81,7 +81,7 @@ LOADED_N, LOADED_S = 0.6, 0.3
 DEAD_S = 1.0
 # Restarted sim's first sample -> its wrench on the hand, in simulated time (hil_stack): the gate
 # waits for the load to be steady, while the restarted fluid still sloshes around the spoon
-# (measured 0.5-2.0 s).
+# (rt_core/README.md gives the times seen).
 RECOVERY_BOUND_S = 2.5
 
 

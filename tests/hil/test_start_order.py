@@ -22,8 +22,7 @@ PARTS = ("device", "rt", "sim", "render")
 # Last part up -> the sim's wrench on the hand, in simulated time (hil_stack says why). The engage
 # gate waits for a steady load, and a freshly started fluid settles around the resting spoon for a
 # while; a sim started before the loop has also played the scene's stroke meanwhile (it had no
-# device pose), so its spoon first swings back to the hand.
-# Measured 0.0-2.0 s on the 2-core dev VM, where the sim ran at a real-time factor of ~0.9.
+# device pose), so its spoon first swings back to the hand (rt_core/README.md gives the times seen).
 RENDERED_WITHIN_S = 3.0
 
 

@@ -42,7 +42,7 @@ double front_x(const Solver& s) {
 // 4 spacings of the wall as a height of water at rest density over that strip. The top of the
 // collapsing column breaks into a loose spray of particles at half the rest density (pressure is
 // clamped at zero, nothing holds a free surface together), so its highest particles stand up to
-// twice as high as the water beneath them (measured eta 0.9 at tau = 2 against 0.5).
+// twice as high as the water beneath them.
 double column_height(const Solver& s) {
   const double strip = 4 * s.params().particle_spacing_m;
   const double width = s.params().box_hi[1] - s.params().box_lo[1];
@@ -95,10 +95,9 @@ void check_dam_break(const char* scene_file, bool incompressible) {
     } else {
       const double eta = column_height(solver) / (2 * a), reference = sample.reference;
       const double tau = sample.t_s * std::sqrt(g / a);
-      // The collapse itself (tau <= 1.3) within 10% (measured -4% to +3.5% on both backends).
-      // Once the surge has left, the column drains early, as the front runs ahead: measured 10-28%
-      // low at tau = 1.5-2.5 (CPU at most 18%, Vulkan 28%; 20 particles across the column):
-      // never more than 35% low or 10% high.
+      // The collapse itself (tau <= 1.3) within 10%. Once the surge has left, the weakly
+      // compressible column drains early, as its front runs ahead (20 particles across the
+      // column): never more than 35% low or 10% high.
       if (tau <= 1.3 || incompressible) {
         EXPECT_NEAR(eta, reference, 0.10 * reference) << "tau = " << tau;
       } else {
@@ -114,14 +113,9 @@ void check_dam_break(const char* scene_file, bool incompressible) {
   std::cout << "dam break (" << solver.method() << ", " << solver.steps() << " steps): worst relative front error "
             << worst_front * 100 << " %, residual column " << worst_column * 100 << " %\n";
   // Unlike the hydrostatic and momentum scenes, the last-resort wall clamp does act here, so it
-  // is not asserted to stay at 0; it is reported. Measured 737 events by t = 0.25 s on the CPU,
-  // from t = 0.09 s on, at the back wall, both slab walls and the floor: velocity noise (the
-  // out-of-plane rms speed, zero in the experiment, grows from 5 mm/s at t = 0.01 s to 0.24 m/s
-  // at 0.1 s and 0.7 m/s at 0.14 s) throws particles at up to 5 m/s, 2.5 times the flow's
-  // sqrt(2 g 2a), into the walls' first layer. Not the wall thickness (4 layers: 451 events),
-  // the slab's thinness (twice as wide: 583) or the stiffness (c = 30 m/s: 5122); 1 Pa s of
-  // viscosity keeps the noise at 5 cm/s and the clamp idle, but holds the front more than 5%
-  // behind Martin & Moyce from t = 0.12 s.
+  // is not asserted to stay at 0; it is reported: velocity noise out of the slab's plane (zero in
+  // the experiment) throws particles into the walls' first layer faster than the flow itself
+  // moves (sim_gpu/README.md, "Known").
   std::cout << "dam break: wall clamp events " << solver.clamped_particle_count() << "\n";
   EXPECT_EQ(solver.model().fluid.size(), count);      // mass conserved exactly
   for (float x : solver.model().fluid.x) ASSERT_LT(x, 0.6f);  // held by the far wall

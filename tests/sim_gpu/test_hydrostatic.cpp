@@ -103,8 +103,7 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   for (int k = 0; k < snapshots; ++k) {
     test::run_for(solver, 0.03, 0.03);
     const Profile now = pressure_profile(solver, scene);
-    // The 10% holds for every settled snapshot, not only on average (worst band of the 10
-    // snapshots measured 5.1% on the CPU, 4.7% on Vulkan; time-averaged 4.2% and 3.5%).
+    // The 10% holds for every settled snapshot, not only on average.
     for (std::size_t b = 0; b < now.depth_m.size(); ++b) {
       const double expected = scene.fluid.rest_density_kg_m3 * 9.81 * now.depth_m[b];  // Pa
       EXPECT_NEAR(now.pressure_pa[b], expected, 0.10 * expected) << "snapshot " << k << ", depth " << now.depth_m[b] << " m";
@@ -175,7 +174,7 @@ TEST(Hydrostatic, TankSettlesToHydrostaticPressureWithoutLeaking) {
   }
   const double gradient = sdp / sdd;  // Pa/m
   std::cout << "hydrostatic: dp/dd = " << gradient << " Pa/m (rho0 g = " << rho0 * g << ")\n";
-  // Within 5% (measured +1-2% on either backend; +7-9% without the first-moment correction).
+  // Within 5%: without the first-moment correction of the pressure force it is not.
   EXPECT_NEAR(gradient, rho0 * g, 0.05 * rho0 * g);
 }
 

@@ -131,15 +131,14 @@ TEST(RigidBody, BodyAndFluidInZeroGravityConserveMomentum) {
   EXPECT_LT(norm(c.p1 - c.p0), 1e-3 * c.fluid_momentum) << "momentum drift " << norm(c.p1 - c.p0) << " kg m/s";
   EXPECT_EQ(c.clamped, 0u);
   // Angular momentum is not conserved here, and no assertion pretends it is: eq. 9's pair force
-  // lies along v_j - v_i, not along r_ij, so a pair in shear exerts a couple on the system
-  // (measured: 0.34% of L lost in 0.12 s at 0.5 Pa s, 90 times the inviscid drift below).
+  // lies along v_j - v_i, not along r_ij, so a pair in shear exerts a couple on the system.
 }
 
 TEST(RigidBody, InviscidBodyAndFluidInZeroGravityConserveAngularMomentum) {
   // Without viscosity every pair force lies along r_ij (pressure, eq. 5 and its mirror on the
   // body, contact damping along r_ij) and the leap-frog step conserves sum x_n × v_{n+1/2}
   // exactly for central forces at x_n; the body's spin is carried as I_world w (eq. 13). What
-  // is left is float rounding: measured 1.05e-7 kg m^2/s of 2.69e-3 (3.9e-5 of it).
+  // is left is float rounding.
   const Collision c = collide_in_zero_gravity(0.0);
   EXPECT_GT(c.body_speed_after, -0.9);
   EXPECT_LT(norm(c.p1 - c.p0), 1e-3 * c.fluid_momentum);
@@ -196,9 +195,8 @@ density_kg_m3 = 700.0
             << ", energy drift " << worst_e << ", |q| - 1 " << worst_unit << "\n";
   EXPECT_GT(w_l_angle, 0.05);         // rad: not a principal axis, so w and L differ
   EXPECT_GT(widest_w_turn, 0.75 * kPi);  // it turns over
-  EXPECT_LT(worst_l, 1e-9);  // measured 1.4e-12: rounding
-  // Measured +0.77% after 3 s, gained mostly during the turn-overs (+0.36% by t = 1 s); first
-  // order in dt: +0.17% with the 0.29 ms CFL step, +0.11% with 0.19 ms.
+  EXPECT_LT(worst_l, 1e-9);  // rounding
+  // The energy the integrator gains is first order in dt and comes during the turn-overs.
   EXPECT_LT(worst_e, 0.02);
   EXPECT_LT(worst_unit, 1e-12);
   EXPECT_NEAR(norm(b.position - Vec3{0.18 + 0.02, 0.17 + 0.03, 0.15 + 0.05}), 0.0, 1e-12);  // no force: the centre stays
@@ -250,7 +248,7 @@ cfl = 0.2
   std::cout << "floating sphere: centre " << centre << " m, surface " << surface << " m, submerged fraction "
             << fraction << "\n";
   // Particle boundaries blur the surface by a fraction of a spacing: at 3 spacings per radius the
-  // sphere sits a little high (measured 0.45); "about half" within 0.15.
+  // sphere sits a little high; "about half" within 0.15.
   EXPECT_NEAR(fraction, 0.5, 0.15);
   EXPECT_LT(fastest, 0.1);  // m/s: only a residual bob of a few mm is left
   std::filesystem::remove_all(dir);
@@ -438,7 +436,7 @@ TEST(Coupling, SpunContainerFeelsTorqueOpposingSpinGrowingWithItsViscosity) {
   std::cout << "spin-up mean fluid torque about z: container 2 Pa s " << low << " N m, 40 Pa s " << high << " N m\n";
   EXPECT_LT(low, 0.0);   // against the spin (+z)
   EXPECT_LT(high, 0.0);
-  EXPECT_LT(high, 1.5 * low);  // much stronger (more negative) with the more viscous container (measured 2.3x)
+  EXPECT_LT(high, 1.5 * low);  // much stronger (more negative) with the more viscous container
 }
 
 TEST(Coupling, SpunContainerInDfsphHandsTheFluidWhatItFeelsAtStepsItsViscosityDoesNotShrink) {

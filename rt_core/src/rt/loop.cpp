@@ -309,8 +309,8 @@ void RtLoop::run(std::uint64_t duration_ns) {
   const std::uint64_t period = static_cast<std::uint64_t>(rig_.rt.period_ns);
   std::uint64_t start = now_ns();
   // On the period grid, shifted by rt.wake_phase_ns off the kernel's scheduler tick (which fires on
-  // whole multiples of its own period, and so of 1 ms): measured ~2x the median wake latency when
-  // the two coincide (docs/rig-setup.md, "Wake latency").
+  // whole multiples of its own period, and so of 1 ms): the two coinciding doubles the median wake
+  // latency (docs/rig-setup.md, "Wake latency").
   const std::uint64_t phase = static_cast<std::uint64_t>(rig_.rt.wake_phase_ns);
   std::uint64_t next = (start / period + 1) * period + phase;
   std::uint64_t end = duration_ns ? start + duration_ns : ~0ull;

@@ -7,8 +7,8 @@
 // ever. Two dissipative terms act between solid particles:
 //  - eq. 9 of the paper, V_i V_c (mu_i + mu_c) / 2 (v_c - v_i) lap W, with the bodies' (and the
 //    walls') viscosities, as between a body and the fluid. It damps sliding as well as approach,
-//    but at the viscosities the scenes use (0.001-40 Pa s) it is far too weak for an impact:
-//    measured restitution 0.97 at 5 Pa s, 0.79 at 50 Pa s.
+//    but at the viscosities the scenes use (0.001-40 Pa s) it is far too weak for an impact
+//    (sim_gpu/README.md gives the restitutions).
 //  - Monaghan's artificial viscosity (Monaghan 1992, "Smoothed particle hydrodynamics", Annu.
 //    Rev. Astron. Astrophys. 30, eq. 4.1 with beta = 0), the standard SPH damping of colliding
 //    particles: an extra pair pressure
