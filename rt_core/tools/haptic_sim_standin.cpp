@@ -89,6 +89,7 @@ int main(int argc, char** argv) {
   std::mt19937_64 rng(1);
   std::uniform_real_distribution<double> u(-1, 1);
   auto sample = std::make_unique<shm::SimSample>();
+  std::snprintf(sample->backend, sizeof sample->backend, "standin");
   shm::DeviceStatesRecord states{};
   const std::uint64_t period_ns = static_cast<std::uint64_t>(1e9 / rate_hz);
   const std::uint64_t start = shm::monotonic_ns();

@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <vector>
 
 #include "hapfluid/config/build_id.hpp"
@@ -287,6 +288,9 @@ int run_live(const LiveOptions& o) {
 
   // Buffers reused every step: nothing below allocates per step except the CSV rows.
   auto sample = std::make_unique<shm::SimSample>();
+  std::snprintf(sample->backend, sizeof sample->backend, "%s", solver->backend());
+  sample->fluid_particles = static_cast<std::uint32_t>(fluid_count);
+  const bool cpu_backend = std::string_view(solver->backend()) == "cpu";
   std::vector<std::byte> frame(shm::particle_frame_bytes(static_cast<std::uint32_t>(fluid_count)));
   std::vector<int> live_device_of_scene(m.devices.size(), -1);  // device_states index driving each scene device
   std::vector<int> scene_device_of_entry(shm::kMaxDevices, -1);
@@ -443,7 +447,8 @@ int run_live(const LiveOptions& o) {
         solver->set_device_state(d, held[d]);
       }
 
-      if (thread_choice.threads() > 1) solver->set_active_threads(thread_choice.next());
+      const int active_threads = thread_choice.threads() > 1 ? thread_choice.next() : thread_choice.threads();
+      if (thread_choice.threads() > 1) solver->set_active_threads(active_threads);
       const std::uint64_t step_start = shm::monotonic_ns();
       solver->step(dt);
       now = shm::monotonic_ns();
@@ -468,6 +473,7 @@ int run_live(const LiveOptions& o) {
       shm::SimSample& s = *sample;
       s.sequence = solver->steps();
       s.sim_time_s = solver->time_s();
+      s.threads_active = cpu_backend ? static_cast<std::uint32_t>(active_threads) : 0;
       s.device_tick = have_devices ? devices.tick : 0;
       s.body_count = static_cast<std::uint32_t>(std::min<std::size_t>(m.bodies.size(), shm::kMaxBodies));
       for (std::uint32_t b = 0; b < s.body_count; ++b) {

@@ -17,7 +17,7 @@
 
 namespace hapfluid::shm {
 
-inline constexpr std::uint32_t kAbiVersion = 2;
+inline constexpr std::uint32_t kAbiVersion = 3;
 inline constexpr int kMaxDevices = 4;
 inline constexpr int kMaxBodies = 16;
 inline constexpr int kDeviceNameBytes = 32;
@@ -91,6 +91,11 @@ struct SimSample {
   std::uint64_t device_tick;       // device_states tick the sim used (0: none)
   std::uint32_t body_count;
   std::uint32_t device_count;
+  // What the operator's view shows of the sim (haptic-status): its backend ("cpu", "vulkan";
+  // NUL-terminated), its fluid particles and the CPU threads stepping them now (0: not the cpu).
+  char backend[16];
+  std::uint32_t fluid_particles;
+  std::uint32_t threads_active;
   BodyState bodies[kMaxBodies];
   CouplingModel couplings[kMaxDevices];
 };
@@ -163,7 +168,7 @@ template <class T>
 inline constexpr bool kPlainRecord = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T>;
 static_assert(kPlainRecord<DeviceStatesRecord> && kPlainRecord<SimSample> && kPlainRecord<ParticleFrameHeader> &&
               kPlainRecord<ParticleRecord> && kPlainRecord<TraceRecord>);
-static_assert(kAbiVersion == 2 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2472 &&
+static_assert(kAbiVersion == 3 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2496 &&
                   sizeof(ParticleFrameHeader) == 936 && sizeof(ParticleRecord) == 16 && sizeof(TraceRecord) == 304,
               "shm layout changed: bump kAbiVersion and update these sizes");
 
