@@ -26,7 +26,7 @@ set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 # or run (systemd-sysusers, udevadm), and the Python package's imports, by name.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS
-    "libvulkan1, systemd, udev, python3 (>= 3.11), python3-numpy, python3-matplotlib, python3-can, python3-tomli-w")
+    "libvulkan1, systemd, udev, python3 (>= 3.11), python3-numpy, python3-matplotlib, python3-can, python3-tomli-w, python3-aiohttp")
 # Lavapipe when the rig has no GPU driver of its own; cyclictest for the launcher's latency reference.
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "mesa-vulkan-drivers, rt-tests")
 set(_debian ${CMAKE_SOURCE_DIR}/scripts/debian)

@@ -23,10 +23,10 @@ import time
 
 UNITS = ["hapfluid.target", "haptic-rt.service", "haptic-sim.service", "haptic-render.service",
          "haptic-trace.service"]
-TOOLS = ["haptic-rt", "haptic-sim", "haptic-render", "haptic-trace", "haptic-config", "haptic-fake-device",
-         "haptic-device-probe"]
+TOOLS = ["haptic-rt", "haptic-sim", "haptic-render", "haptic-trace", "haptic-status", "haptic-config",
+         "haptic-fake-device", "haptic-device-probe"]
 PYTHON_COMMANDS = ["hapfluid", "hapfluid-can-monitor", "hapfluid-latency-report", "hapfluid-motion-to-force",
-                   "hapfluid-plot-wrenches"]
+                   "hapfluid-plot-wrenches", "haptic-dashboard"]
 # Where a removed package could leave a unit, an enablement link, a rule or a command behind.
 LEFTOVER_DIRS = ["etc/systemd/system", "usr/lib/systemd/system", "usr/lib/udev/rules.d", "usr/lib/sysusers.d",
                  "usr/bin"]

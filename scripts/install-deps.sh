@@ -22,6 +22,7 @@ debian_core=(
   libusb-1.0-0-dev libhidapi-dev can-utils libsystemd-dev systemd
   rt-tests strace
   python3-venv
+  chromium
 )
 debian_hil=(qemu-system-x86 busybox-static cpio kmod udev)
 # clang-14 (via clang) compiles the fuzzing build, libclang-rt-14-dev holds libFuzzer and the

@@ -196,6 +196,16 @@ Rig parse_rig(const std::string& text, const std::filesystem::path& file) {
   rig.file = file;
   rig.name = r.string("name", file.stem().string());
   if (auto rt = r.table("rt")) rig.rt = read_rt(*rt);
+  if (auto d = r.table("dashboard")) {
+    rig.dashboard.address = d->string("address", rig.dashboard.address);
+    const std::string& a = rig.dashboard.address;
+    const auto colon = a.rfind(':');
+    const std::string port = colon == std::string::npos ? "" : a.substr(colon + 1);
+    const bool digits = !port.empty() && port.size() <= 5 && port.find_first_not_of("0123456789") == std::string::npos;
+    if (colon == 0 || colon == std::string::npos || !digits || std::stoi(port) < 1 || std::stoi(port) > 65535)
+      d->problem("address", "\"" + a + "\" is not HOST:PORT (e.g. \"127.0.0.1:8642\")");
+    d->finish();
+  }
   std::set<std::string> names;
   for (auto& device : r.tables("devices")) {
     rig.devices.push_back(read_device(device));

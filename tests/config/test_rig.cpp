@@ -78,6 +78,18 @@ TEST(Rig, UnknownKeyIsReportedAsATypo) {
   EXPECT_EQ(problems_of(text), "rig.toml:5: devices.left.max_forse_n = 3.0: unknown key");
 }
 
+TEST(Rig, TheDashboardListensOnLoopbackUnlessTheRigSaysWhere) {
+  EXPECT_EQ(parse_rig(kMinimalDevice, "rig.toml").dashboard.address, "127.0.0.1:8642");
+  const Rig rig = parse_rig(std::string("[dashboard]\naddress = \"0.0.0.0:9000\"\n") + kMinimalDevice, "rig.toml");
+  EXPECT_EQ(rig.dashboard.address, "0.0.0.0:9000");
+  EXPECT_EQ(problems_of(std::string("[dashboard]\naddress = \"localhost\"\n") + kMinimalDevice),
+            "rig.toml:2: dashboard.address = \"localhost\": \"localhost\" is not HOST:PORT (e.g. \"127.0.0.1:8642\")");
+  EXPECT_NE(problems_of(std::string("[dashboard]\naddress = \"h:70000\"\n") + kMinimalDevice).find("is not HOST:PORT"),
+            std::string::npos);
+  EXPECT_NE(problems_of(std::string("[dashboard]\nport = 1\n") + kMinimalDevice).find("dashboard.port = 1: unknown key"),
+            std::string::npos);
+}
+
 TEST(Rig, WrongTypeIsReported) {
   std::string text = std::string(kMinimalDevice) + "max_force_n = \"ten\"\n";
   EXPECT_NE(problems_of(text).find("devices.left.max_force_n = \"ten\": must be a number"), std::string::npos);

@@ -8,8 +8,8 @@ import tomllib
 
 import pytest
 
-BINARIES = ["haptic-rt", "haptic-sim", "haptic-render", "haptic-trace", "haptic-config", "haptic-fake-device",
-            "haptic-device-probe"]
+BINARIES = ["haptic-rt", "haptic-sim", "haptic-render", "haptic-trace", "haptic-status", "haptic-config",
+            "haptic-fake-device", "haptic-device-probe"]
 PYTHON_COMMANDS = list(tomllib.loads((pathlib.Path(__file__).parents[2] / "scripts/pyproject.toml").read_text())
                        ["project"]["scripts"])
 UNITS = ["haptic-rt.service", "haptic-sim.service", "haptic-render.service", "haptic-trace.service",
@@ -39,7 +39,7 @@ def test_the_package_depends_on_what_its_binaries_link_and_its_python_imports(de
     depends = {d.split()[0] for d in field(package, "Depends").split(", ")}
     # by name: what the binaries load (Vulkan through volk) or run, and the Python package's imports
     assert {"libvulkan1", "systemd", "udev", "python3", "python3-numpy", "python3-matplotlib", "python3-can",
-            "python3-tomli-w"} <= depends
+            "python3-tomli-w", "python3-aiohttp"} <= depends
     # from dpkg-shlibdeps: what the binaries link
     assert {"libc6", "libstdc++6", "libtomlplusplus3", "libusb-1.0-0", "libhidapi-hidraw0", "libsystemd0",
             "libglfw3", "libpng16-16"} <= depends
@@ -68,6 +68,7 @@ def test_the_python_package_is_debians_layout_with_its_entry_points(deb):
     _, tree = deb
     site = tree / "usr/lib/python3/dist-packages"
     assert (site / "hapfluid/launcher.py").is_file() and (site / "hapfluid/c_constants.py").is_file()
+    assert (site / "hapfluid/dashboard/static/index.html").is_file()
     (dist_info,) = site.glob("hapfluid-*.dist-info")
     entry_points = (dist_info / "entry_points.txt").read_text()
     assert "[can.interface]" in entry_points and "hapfluid_loopback" in entry_points

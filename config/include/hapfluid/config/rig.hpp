@@ -115,10 +115,17 @@ struct RtSettings {
   std::uint32_t flight_recorder_ticks = 500;
 };
 
+// haptic-dashboard, the operator's read-only page: where it listens. Loopback by default; reach
+// it from another machine through an SSH tunnel (docs/rig-setup.md).
+struct DashboardSettings {
+  std::string address = "127.0.0.1:8642";  // HOST:PORT
+};
+
 struct Rig {
   std::filesystem::path file;
   std::string name;
   RtSettings rt;
+  DashboardSettings dashboard;
   std::vector<RigDevice> devices;
 
   const RigDevice* find_device(const std::string& name) const;
