@@ -22,7 +22,7 @@ import tempfile
 import time
 
 UNITS = ["hapfluid.target", "haptic-rt.service", "haptic-sim.service", "haptic-render.service",
-         "haptic-trace.service"]
+         "haptic-trace.service", "haptic-dashboard.service"]
 TOOLS = ["haptic-rt", "haptic-sim", "haptic-render", "haptic-trace", "haptic-status", "haptic-config",
          "haptic-fake-device", "haptic-device-probe"]
 PYTHON_COMMANDS = ["hapfluid", "hapfluid-can-monitor", "hapfluid-latency-report", "hapfluid-motion-to-force",

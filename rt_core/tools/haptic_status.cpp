@@ -2,7 +2,8 @@
 // object per line on stdout at --rate Hz: the loop's wake latency, overruns and deadline misses,
 // every device's link, faults, engage state and wrenches, the sim's rate and sample age. It maps
 // every segment read-only and writes nothing anywhere but stdout; haptic-dashboard serves it.
-//   haptic-status [--shm-prefix NAME] [--rate HZ] [--duration S] [--once]   (--help, --version)
+//   haptic-status [--shm-prefix NAME] [--rate HZ] [--duration S] [--once] [--trust-user NAME]
+#include <pwd.h>
 #include <signal.h>
 
 #include <atomic>
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
   std::string prefix = "hapfluid";
   double rate_hz = 30, duration_s = 0;
   bool once = false;
+  std::string trust_user;
   CLI::App app{"Prints what a running hapfluid stack is doing, read-only, as one JSON object per line.",
                "haptic-status"};
   config::apply_convention(app);
@@ -36,7 +38,17 @@ int main(int argc, char** argv) {
       ->check(config::non_negative_number("seconds"))
       ->capture_default_str();
   app.add_flag("--once", once, "print one line after a first look (a tenth of a second) and exit");
+  app.add_option("--trust-user", trust_user,
+                 "also trust segments of this user (the services' user, when this runs as a user of its own)");
   if (const int code = config::parse_command_line(app, argc, argv); code >= 0) return code;
+  if (!trust_user.empty()) {
+    const passwd* user = ::getpwnam(trust_user.c_str());
+    if (!user) {
+      std::fprintf(stderr, "haptic-status: --trust-user %s: no such user\n", trust_user.c_str());
+      return 2;
+    }
+    shm::trust_writer_uid(user->pw_uid);
+  }
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigaction(SIGINT, &action, nullptr);

@@ -37,6 +37,7 @@ import math
 import os
 import pathlib
 import signal
+import socket
 import subprocess
 import sys
 import tomllib
@@ -355,6 +356,15 @@ def run_live(args, scene_path, out, bin_dir):
         cyclictest = start_cyclictest_beside(args, rig_path, out)
         stack.start("haptic-trace", [bin_dir / "haptic-trace", "--out", out / "trace.csv", "--shm-prefix", prefix,
                                      "--wait", "10"], cpus=service_cpus)
+        if not args.no_dashboard:
+            # The operator's page, as on a rig: read-only, off the loop's CPU, at the rig's address
+            # (another port when a second run holds it).
+            listen = dashboard_listen(rig)
+            stack.start("haptic-dashboard", [sys.executable, "-m", "hapfluid.dashboard", "--shm-prefix", prefix,
+                                             "--listen", listen, "--flight-dir", out / "flight",
+                                             "--status-binary", bin_dir / "haptic-status"],
+                        cpus=service_cpus, nice=10)
+            print(f"hapfluid: the operator's page: http://{listen}/", flush=True)
         sim = stack.start("haptic-sim", [bin_dir / "haptic-sim", "--live", "--scene", scene_path, "--rig", rig_path,
                                          "--shm-prefix", prefix, "--out", out / "sim", "--status-every", "2",
                                          "--threads", str(args.sim_threads), "--backend", args.backend,
@@ -384,7 +394,8 @@ def run_live(args, scene_path, out, bin_dir):
         ok = False
         print(f"hapfluid: {e}", file=sys.stderr)
     cyclictest_run = stop_cyclictest(cyclictest)
-    codes = stack.stop_all(grace={"haptic-render": 8.0}, order=["haptic-render", "haptic-rt", "haptic-trace", "haptic-sim"] +
+    codes = stack.stop_all(grace={"haptic-render": 8.0}, order=["haptic-render", "haptic-dashboard", "haptic-rt",
+                                                                "haptic-trace", "haptic-sim"] +
                            [n for n, _, _ in stack.procs if n.startswith("haptic-fake-device")])
     for name, code in codes.items():
         if code != 0:
@@ -396,6 +407,17 @@ def run_live(args, scene_path, out, bin_dir):
         ok = False
         print(f"hapfluid: shared memory left behind: {leftovers}", file=sys.stderr)
     return ok, rig, device_logs, stack.started_at, cyclictest_run
+
+
+def dashboard_listen(rig: dict) -> str:
+    """The rig's dashboard.address, or the same host on a free port when that one is taken."""
+    host, _, port = rig.get("dashboard", {}).get("address", "127.0.0.1:8642").rpartition(":")
+    with socket.socket(socket.AF_INET6 if ":" in host.strip("[]") else socket.AF_INET) as s:
+        try:
+            s.bind((host.strip("[]"), int(port)))
+        except OSError:
+            s.bind((host.strip("[]"), 0))
+        return f"{host}:{s.getsockname()[1]}"
 
 
 def start_cyclictest_beside(args, rig_path: pathlib.Path, out: pathlib.Path):
@@ -580,6 +602,7 @@ def main():
     run.add_argument("--cyclictest-cpu", type=int, default=None,
                      help="CPU for cyclictest (default: the loop's rt.cpu; see cyclictest_placement)")
     run.add_argument("--batch", action="store_true", help="batch simulation only (no live processes)")
+    run.add_argument("--no-dashboard", action="store_true", help="do not serve the operator's page beside the stack")
     run.add_argument("--backend", choices=("auto", "vulkan", "cpu"), default="auto",
                      help="simulator backend (auto: Vulkan if it keeps up with the wall clock on this machine and "
                           "scene, else the faster one, said in the sim's log and the summary; sim_gpu/live/README.md)")

@@ -5,10 +5,12 @@ import json
 import os
 import shutil
 import subprocess
+import sys
 
 import pytest
 
-UNITS = ("haptic-rt.service", "haptic-sim.service", "haptic-render.service", "haptic-trace.service", "hapfluid.target")
+UNITS = ("haptic-rt.service", "haptic-sim.service", "haptic-render.service", "haptic-trace.service",
+         "haptic-dashboard.service", "hapfluid.target")
 
 
 @pytest.mark.skipif(not shutil.which("systemd-analyze"), reason="systemd-analyze not installed")
@@ -26,6 +28,14 @@ def test_installed_units_pass_systemd_analyze_verify(build_dir, tmp_path):
                  "User=hapfluid", "Restart=on-failure", f"ExecStart={tmp_path}/bin/haptic-rt "):
         assert line in rt, line
     assert "Type=notify" in (units / "haptic-sim.service").read_text()
+    # The operator's page: a user of its own that only reads, no capabilities, nothing to write.
+    dashboard = (units / "haptic-dashboard.service").read_text()
+    for line in ("User=hapfluid-dashboard\n", "Group=hapfluid\n", "CapabilityBoundingSet=\n",
+                 "ReadOnlyPaths=/dev/shm /var/lib/hapfluid\n", "NoNewPrivileges=yes\n", "--trust-user hapfluid ",
+                 f"ExecStart={tmp_path}/bin/haptic-dashboard "):
+        assert line in dashboard, line
+    assert "u hapfluid-dashboard -:hapfluid" in (tmp_path / "lib" / "sysusers.d" / "hapfluid.conf").read_text()
+    assert "haptic-dashboard.service" in (units / "hapfluid.target").read_text()
     result = subprocess.run(["systemd-analyze", "verify", *(str(units / n) for n in UNITS)],
                             capture_output=True, text=True, timeout=60)
     # verify exits 0 on some warnings (unknown keys are "ignored"): any message about our units fails.
@@ -49,6 +59,17 @@ def _vulkan_batch(binary, source_dir, out, preexec=None):
     return subprocess.run([str(binary("haptic-sim")), "--scene", str(scene), "--backend", "vulkan",
                            "--duration", "0.02", "--out", str(out)],
                           capture_output=True, text=True, timeout=120, preexec_fn=preexec)
+
+
+def test_dashboard_unit_memory_policy_lets_the_page_serve(binary, source_dir):
+    # MemoryDenyWriteExecute=yes in haptic-dashboard.service: Python and aiohttp must start under it.
+    unit = (source_dir / "scripts" / "systemd" / "haptic-dashboard.service.in").read_text()
+    assert any(l.strip() == "MemoryDenyWriteExecute=yes" for l in unit.splitlines())
+    run = subprocess.run([sys.executable, "-c", "import aiohttp.web, hapfluid.dashboard.server"],
+                         capture_output=True, text=True, timeout=60, preexec_fn=_deny_write_execute)
+    if run.returncode == 97:
+        pytest.skip("this kernel has no PR_SET_MDWE (Linux < 6.3)")
+    assert run.returncode == 0, run.stderr[-2000:]
 
 
 def test_sim_unit_memory_policy_lets_the_vulkan_backend_run(binary, source_dir, tmp_path):

@@ -82,6 +82,26 @@ TEST(ShmOwnership, ReaderRefusesASegmentOfAnotherUserAndNamesTheOwner) {
   writer.close();
 }
 
+TEST(ShmOwnership, AReaderOfItsOwnUserTrustsTheWritersUserItNamesAndNoOther) {
+  // haptic-dashboard's observer runs as its own user: it names the services' user, whose
+  // segments it then reads; a third user's segment is still refused, naming all it would take.
+  if (::geteuid() != 0) GTEST_SKIP() << "chown to another user needs root";
+  auto name = unique_name("writersuser");
+  auto writer = LatestWriter::create(name, ChannelKind::sim_samples, sizeof(Sample));
+  writer.publish(Sample{7, {}});
+  change_owner(name, kNobody);
+  trust_writer_uid(kNobody);
+  Sample got{};
+  EXPECT_EQ(LatestReader::attach(name, ChannelKind::sim_samples, sizeof(Sample)).try_read(got), ReadResult::ok);
+  EXPECT_EQ(got.value, 7u);
+  trust_writer_uid(kNobody - 1);
+  const std::string error = attach_error(name);
+  EXPECT_NE(error.find("owned by uid 65534"), std::string::npos) << error;
+  EXPECT_NE(error.find("or the writers' user (uid 65533"), std::string::npos) << error;
+  trust_writer_uid(static_cast<uid_t>(-1));
+  writer.close();
+}
+
 TEST(ShmOwnership, SquattedNameNeitherHijacksNorBlocksTheRig) {
   // Another user created the channel's name before the services started, with a well-formed
   // header and a record of its own. The writer must start anyway, and the reader must get the

@@ -13,7 +13,7 @@ BINARIES = ["haptic-rt", "haptic-sim", "haptic-render", "haptic-trace", "haptic-
 PYTHON_COMMANDS = list(tomllib.loads((pathlib.Path(__file__).parents[2] / "scripts/pyproject.toml").read_text())
                        ["project"]["scripts"])
 UNITS = ["haptic-rt.service", "haptic-sim.service", "haptic-render.service", "haptic-trace.service",
-         "hapfluid.target"]
+         "haptic-dashboard.service", "hapfluid.target"]
 
 
 @pytest.fixture(scope="module")

@@ -5,6 +5,7 @@
 #include <pwd.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <random>
@@ -33,7 +34,13 @@ std::string describe_user(uid_t uid) {
   return text;
 }
 
-bool trusted_owner(uid_t uid) { return uid == ::geteuid() || uid == 0; }
+namespace {
+std::atomic<uid_t> g_trusted_writer{static_cast<uid_t>(-1)};
+}  // namespace
+
+bool trusted_owner(uid_t uid) {
+  return uid == ::geteuid() || uid == 0 || uid == g_trusted_writer.load(std::memory_order_relaxed);
+}
 
 std::string trust_problem(const struct stat& st) {
   const uid_t self = ::geteuid();
@@ -41,7 +48,10 @@ std::string trust_problem(const struct stat& st) {
   if (!trusted_owner(st.st_uid))
     return "is owned by " + describe_user(st.st_uid) + ", not by " +
            (self == 0 ? std::string("root (this service's user)")
-                      : "this service's user (" + describe_user(self) + ") or root");
+                      : "this service's user (" + describe_user(self) + ") or root") +
+           (g_trusted_writer.load() != static_cast<uid_t>(-1)
+                ? " or the writers' user (" + describe_user(g_trusted_writer.load()) + ")"
+                : std::string());
   if (st.st_mode & (S_IWGRP | S_IWOTH)) {
     char mode[16];
     std::snprintf(mode, sizeof mode, "%04o", unsigned(st.st_mode & 07777));
@@ -71,3 +81,7 @@ std::string new_fallback_name(const std::string& name) {
 }
 
 }  // namespace hapfluid::shm::detail
+
+namespace hapfluid::shm {
+void trust_writer_uid(uid_t uid) { detail::g_trusted_writer.store(uid, std::memory_order_relaxed); }
+}  // namespace hapfluid::shm

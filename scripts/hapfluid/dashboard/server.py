@@ -8,7 +8,7 @@ sends. Nothing here opens a segment, a device or a socket to the stack, so nothi
 can move a motor, clear a fault or change a limit. It listens on 127.0.0.1:8642 unless told
 (rig key dashboard.address); reach it from another machine through an SSH tunnel.
 
-  haptic-dashboard [--rig FILE] [--shm-prefix P] [--listen HOST:PORT] [--flight-dir DIR]
+  haptic-dashboard [--rig FILE] [--shm-prefix P] [--listen HOST:PORT] [--flight-dir DIR] [--trust-user U]
 """
 from __future__ import annotations
 
@@ -46,8 +46,10 @@ class Observer:
     """Runs haptic-status and keeps its newest snapshot and the last HISTORY_S of points. Restarts
     it should it ever end; until it prints, the snapshot says the observer is starting."""
 
-    def __init__(self, binary: pathlib.Path, prefix: str, rate_hz: float, flight_dir: pathlib.Path | None):
+    def __init__(self, binary: pathlib.Path, prefix: str, rate_hz: float, flight_dir: pathlib.Path | None,
+                 trust_user: str | None = None):
         self.binary, self.prefix, self.rate_hz, self.flight_dir = binary, prefix, rate_hz, flight_dir
+        self.trust = ("--trust-user", trust_user) if trust_user else ()
         self.snapshot: dict = {"observer": "starting", "prefix": prefix}
         self.history: collections.deque = collections.deque()
         self.listeners: set[asyncio.Queue] = set()
@@ -58,7 +60,7 @@ class Observer:
         while True:
             try:
                 self.process = await asyncio.create_subprocess_exec(
-                    str(self.binary), "--shm-prefix", self.prefix, "--rate", str(self.rate_hz),
+                    str(self.binary), "--shm-prefix", self.prefix, "--rate", str(self.rate_hz), *self.trust,
                     stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE, limit=1 << 20)
             except OSError as e:
                 self.snapshot = {"observer": f"cannot run {self.binary}: {e}", "prefix": self.prefix}
@@ -184,6 +186,8 @@ def main(argv=None):
     ap.add_argument("--shm-prefix", help="shared-memory prefix of the stack (default: the rig's, else hapfluid)")
     ap.add_argument("--listen", help=f"HOST:PORT to serve on (default: the rig's, else {DEFAULT_LISTEN})")
     ap.add_argument("--flight-dir", type=pathlib.Path, help="haptic-rt's --flight-dir, whose dumps the page offers")
+    ap.add_argument("--trust-user", help="the services' user, whose segments to read when this runs as a user of "
+                                         "its own (its systemd unit: hapfluid)")
     ap.add_argument("--rate", type=float, default=MAX_RATE_HZ, help="updates per second (at most 30)")
     ap.add_argument("--status-binary", type=pathlib.Path, default=BIN / "haptic-status",
                     help="the haptic-status to run (default: %(default)s)")
@@ -202,7 +206,7 @@ def main(argv=None):
     host, port = parse_listen(listen, "--listen" if args.listen else f"{args.rig}: dashboard.address")
     if not os.access(args.status_binary, os.X_OK):
         ap.error(f"--status-binary {args.status_binary}: not an executable (run `make`)")
-    observer = Observer(args.status_binary, prefix, args.rate, args.flight_dir)
+    observer = Observer(args.status_binary, prefix, args.rate, args.flight_dir, args.trust_user)
     log.info("serving the stack with shm prefix %s on http://%s:%d/", prefix, host, port)
     sys.stdout.flush()
     web.run_app(make_app(observer), host=host, port=port, print=None, access_log=None)

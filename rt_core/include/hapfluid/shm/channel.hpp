@@ -76,6 +76,11 @@ static_assert(sizeof(SegmentHeader) == 128);
 // Monotonic clock in ns (vDSO, no syscall).
 std::uint64_t monotonic_ns();
 
+// A reader that runs as its own user (haptic-dashboard's observer) names the writers' user here,
+// once, before it attaches: segments of that user are then trusted too, besides the process's
+// own user and root. Nothing else changes: a segment others may write is still refused.
+void trust_writer_uid(uid_t uid);
+
 // What a reader concluded about its writer.
 enum class WriterStatus {
   not_attached,  // no segment mapped (yet)
