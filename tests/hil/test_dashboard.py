@@ -129,8 +129,16 @@ def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary
         controls = page.evaluate("document.querySelectorAll('button, input, select, textarea, form').length")
         assert controls == 0
         assert sent_by_page == []
+        # An open page does not hold the server up when it is stopped (SIGINT, systemctl stop).
+        assert stack.stop("dashboard", timeout=5) == 0
+        wait_page(page, "the page saying it lost the server",
+                  lambda s: page.text_content("#connection").startswith("disconnected"))
         browser.close()
 
+    stack._start("dashboard2", [sys.executable, "-m", "hapfluid.dashboard", "--shm-prefix", stack.prefix,
+                                "--listen", f"127.0.0.1:{port}", "--flight-dir", stack.dir / "flight",
+                                "--status-binary", binary("haptic-status")])
+    stack.wait_until("the restarted dashboard answers", lambda: _answers(url), watch=("dashboard2",))
     # The flight recorder dumped at the faults; the page offers each dump as it is on disk.
     with urllib.request.urlopen(url + "api/status", timeout=5) as r:
         dumps = json.load(r)["snapshot"]["flight_dumps"]
@@ -145,7 +153,7 @@ def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary
     assert _status(url + "flight/rig.toml") == 404
     print(f"dashboard: force plot filled {filled_s:.2f} s after the page opened; sim fault and zero force shown "
           f"{zeroed_s:.2f} s after the kill; screenshots {stack.dir / 'dashboard.png'}")
-    assert stack.stop("dashboard") == 0
+    assert stack.stop("dashboard2") == 0
 
 
 def _answers(url) -> bool:

@@ -22,7 +22,7 @@ import pathlib
 import sys
 import time
 
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 from ..launcher import load_toml
 from ..paths import BIN
@@ -128,9 +128,12 @@ def make_app(observer: Observer) -> web.Application:
         return web.FileResponse(path, headers={"Content-Disposition": f'attachment; filename="{name}"',
                                                "Content-Type": "text/csv"})
 
+    sockets: set = set()
+
     async def websocket(request):
         ws = web.WebSocketResponse(heartbeat=10)
         await ws.prepare(request)
+        sockets.add(ws)
         queue: asyncio.Queue = asyncio.Queue(maxsize=4)
         observer.listeners.add(queue)
         await ws.send_str(json.dumps({"snapshot": observer.snapshot, "history": list(observer.history)}))
@@ -152,6 +155,7 @@ def make_app(observer: Observer) -> web.Application:
             pass
         finally:
             observer.listeners.discard(queue)
+            sockets.discard(ws)
             reader.cancel()
         return ws
 
@@ -167,7 +171,12 @@ def make_app(observer: Observer) -> web.Application:
     async def stop_observer(app):
         app["observer_task"].cancel()
         await observer.stop()
+
+    async def close_pages(app):  # an open page must not hold the server's stop (SIGINT, systemctl stop)
+        for ws in list(sockets):
+            await ws.close(code=WSCloseCode.GOING_AWAY, message=b"haptic-dashboard stops")
     app.on_startup.append(start_observer)
+    app.on_shutdown.append(close_pages)
     app.on_cleanup.append(stop_observer)
     return app
 
