@@ -2,7 +2,7 @@
 with a fake device: the page lists the rig's device and fills its force plot, shows the force the
 loop sent as the trace recorded it, shows a killed sim's fault and the zeroed force, clears it when
 the sim returns, shows a device that went silent as a link fault, and offers nothing that could
-send anything to the stack. The page's screenshot is kept beside the run's logs."""
+send anything to the stack. The page's screenshots are kept in out/test-artefacts/dashboard/."""
 import csv
 import io
 import json
@@ -65,6 +65,8 @@ def stack(binary, tmp_path):
 
 
 def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary, source_dir):
+    artefacts = source_dir / "out" / "test-artefacts" / "dashboard"
+    artefacts.mkdir(parents=True, exist_ok=True)
     assert CHROMIUM, "chromium is missing (scripts/install-deps.sh)"
     stack.fake_device("hand", motion="hold", extra=("--inject-on-signal", "--silent-after", "0"))
     stack.rt(settle_s=0)
@@ -91,6 +93,7 @@ def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary
         # The hand engaged under the stand-in's steady load.
         state, _ = wait_page(page, f"the hand engaged at {LOAD_N} N",
                              lambda s: s["engage"] == "engaged" and abs(s["fz"] - LOAD_N) < 0.05)
+        page.screenshot(path=str(artefacts / "engaged.png"), full_page=True)
 
         # The force shown is the force the loop sent at the tick the page names (the trace's).
         shown = [state]
@@ -113,7 +116,7 @@ def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary
         zeroed_s = time.monotonic() - killed
         assert zeroed_s <= 1.0, f"the page showed the sim fault and zero force {zeroed_s:.2f} s after the kill"
         assert "haptic-sim" in state["banner"]
-        page.screenshot(path=str(stack.dir / "dashboard-sim-killed.png"), full_page=True)
+        page.screenshot(path=str(artefacts / "sim-killed.png"), full_page=True)
 
         # The sim returns: the fault clears, the banner goes.
         stack.standin("--rate", "200", "--force", LOAD, name="standin2")
@@ -122,7 +125,7 @@ def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary
         # The device stops answering: a link fault.
         stack.procs["fake-hand"].send_signal(signal.SIGUSR1)
         state, _ = wait_page(page, "a link fault", lambda s: s["link"] == "link fault" and "link_timeout" in s["faults"])
-        page.screenshot(path=str(stack.dir / "dashboard.png"), full_page=True)
+        page.screenshot(path=str(artefacts / "link-fault.png"), full_page=True)
 
         # Nothing on the page can send anything: no control of any kind, and the page sent
         # nothing but GETs and no WebSocket frame.
@@ -152,7 +155,7 @@ def test_the_operators_page_follows_the_stack_and_sends_it_nothing(stack, binary
     assert _status(url + "flight/..%2Frig.toml") == 404
     assert _status(url + "flight/rig.toml") == 404
     print(f"dashboard: force plot filled {filled_s:.2f} s after the page opened; sim fault and zero force shown "
-          f"{zeroed_s:.2f} s after the kill; screenshots {stack.dir / 'dashboard.png'}")
+          f"{zeroed_s:.2f} s after the kill; screenshots in {artefacts}")
     assert stack.stop("dashboard2") == 0
 
 
