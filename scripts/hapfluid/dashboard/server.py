@@ -21,10 +21,10 @@ import os
 import pathlib
 import sys
 import time
+import tomllib
 
 from aiohttp import WSCloseCode, WSMsgType, web
 
-from ..launcher import load_toml
 from ..paths import BIN
 
 STATIC = pathlib.Path(__file__).parent / "static"
@@ -207,8 +207,8 @@ def main(argv=None):
     rig = {}
     if args.rig:
         try:
-            rig = load_toml(args.rig)
-        except (OSError, ValueError) as e:
+            rig = tomllib.loads(args.rig.read_text())
+        except (OSError, ValueError) as e:  # tomllib.TOMLDecodeError is a ValueError, with line and column
             ap.error(f"--rig {args.rig}: {e}")
     prefix = args.shm_prefix or rig.get("rt", {}).get("shm", {}).get("prefix") or "hapfluid"
     listen = args.listen or rig.get("dashboard", {}).get("address") or DEFAULT_LISTEN
