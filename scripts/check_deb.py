@@ -16,10 +16,12 @@ import argparse
 import json
 import pathlib
 import shutil
+import socket
 import subprocess
 import sys
 import tempfile
 import time
+import urllib.request
 
 UNITS = ["hapfluid.target", "haptic-rt.service", "haptic-sim.service", "haptic-render.service",
          "haptic-trace.service", "haptic-dashboard.service"]
@@ -83,6 +85,27 @@ def leftovers(root: pathlib.Path) -> list[str]:
     return sorted(found)
 
 
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for_page(port: int, server: subprocess.Popen, timeout_s: float = 30) -> dict:
+    """The page's first snapshot from haptic-status, once the server answers with one."""
+    give_up = time.monotonic() + timeout_s
+    while time.monotonic() < give_up and server.poll() is None:
+        try:
+            with urllib.request.urlopen(f"http://127.0.0.1:{port}/api/status", timeout=2) as r:
+                snapshot = json.load(r)["snapshot"]
+            if snapshot.get("observer") == "live":
+                return snapshot
+        except (OSError, ValueError):
+            pass
+        time.sleep(0.2)
+    raise Failed(f"haptic-dashboard never served a snapshot (exit {server.poll()}, logs/dashboard.log)")
+
+
 def check(root: Root, deb: pathlib.Path, results: dict, step):
     p = root.path
     with step("install"):
@@ -90,7 +113,7 @@ def check(root: Root, deb: pathlib.Path, results: dict, step):
         r = root.run("install", f"apt-get install -y -q /tmp/{deb.name}")
         results["packages_pulled_in"] = sum(1 for line in r.stdout.splitlines() if line.startswith("Unpacking "))
     with step("user, group, services disabled"):
-        root.run("user", "getent passwd hapfluid && getent group hapfluid")
+        root.run("user", "getent passwd hapfluid && getent group hapfluid && id hapfluid-dashboard | grep -q '(hapfluid)'")
         states = root.run("enabled", "systemctl is-enabled " + " ".join(UNITS), check=False).stdout.split()
         if states != ["disabled"] * len(UNITS):
             raise Failed(f"after install the units are {dict(zip(UNITS, states))}, not all disabled")
@@ -118,6 +141,22 @@ def check(root: Root, deb: pathlib.Path, results: dict, step):
         if not max(summary.get("max_force_on_hand_n", {}).values(), default=0) > 0:
             raise Failed("the hand felt no force from the fluid in the installed stack's run")
         shutil.copytree(p / "tmp/hapfluid-run", root.logs.parent / "run", dirs_exist_ok=True)
+    with step("the operator's page serves, as its own user"):
+        # As its unit runs it: its own user, trusting the services' user's segments, here with
+        # nothing to watch: the page must answer and say it waits for the loop and the sim.
+        port = free_port()
+        server = subprocess.Popen([shutil.which("chroot") or "/usr/sbin/chroot", "--userspec=hapfluid-dashboard:hapfluid", str(p), "haptic-dashboard",
+                                   "--listen", f"127.0.0.1:{port}", "--trust-user", "hapfluid",
+                                   "--shm-prefix", "hapfluid-check-deb"],
+                                  stdout=subprocess.DEVNULL, stderr=open(root.logs / "dashboard.log", "w"),
+                                  env={"PATH": "/usr/bin:/bin", "HOME": "/"})
+        try:
+            snapshot = wait_for_page(port, server)
+        finally:
+            server.terminate()
+            code = server.wait(timeout=15)
+        if snapshot.get("loop", {}).get("status") != "waiting" or code != 0:
+            raise Failed(f"the page said {snapshot} and the server exited {code} (logs/dashboard.log)")
     with step("remove after the stack was enabled"):
         root.run("enable", "systemctl enable hapfluid.target " + " ".join(u for u in UNITS if u.endswith(".service")))
         root.run("remove", "apt-get remove -y -q hapfluid")
@@ -177,6 +216,8 @@ def main(argv=None) -> int:
             check(root, args.deb, results, step)
         except Failed as e:
             failure = str(e)
+        except Exception as e:  # a defect of this script: said, and the root still cleaned up
+            failure = f"{type(e).__name__}: {e}"
     finally:
         root.unmount()
         # Never delete through a mount that is still there: that would be the host's /dev.
