@@ -2,6 +2,7 @@
 // restart in any order, reads what the loop traced and the sim published, and survives any
 // content a writer puts in a segment.
 #include <gtest/gtest.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -17,6 +18,16 @@ using namespace hapfluid;
 using namespace hapfluid::shm;
 
 namespace {
+
+// Removes the test's segments when the test ends, passed or not (declared before the writers, it
+// goes after them; a writer going out of scope unmaps its segment but leaves the name).
+struct SegmentsRemovedAtEnd {
+  std::string prefix;
+  ~SegmentsRemovedAtEnd() {
+    for (ChannelKind k : {ChannelKind::trace, ChannelKind::device_states, ChannelKind::sim_samples, ChannelKind::particles})
+      ::shm_unlink(segment_name(prefix, k).c_str());
+  }
+};
 
 std::string test_prefix(const char* what) { return "hapfluid-observer-test-" + std::to_string(::getpid()) + "-" + what; }
 
@@ -43,6 +54,7 @@ TEST(StackObserver, WaitsForEachPartAndFollowsItsRecords) {
   EXPECT_EQ(observer.sim().status, "waiting");
   EXPECT_EQ(observer.states_status(), "waiting");
 
+  SegmentsRemovedAtEnd removed{prefix};
   auto trace = RingWriter::create(segment_name(prefix, ChannelKind::trace), ChannelKind::trace, sizeof(TraceRecord), 4096);
   for (std::uint64_t t = 1; t <= 1000; ++t) trace.push(trace_record(t, t <= 990 ? 20'000 : 400'000));
   // Tick 1001 sent its commands 1.5 periods after it was due: a deadline miss.
@@ -117,6 +129,7 @@ TEST(StackObserver, HostileContentIsShownSafelyNeverTrusted) {
   // Non-finite wrenches, a device name without its NUL and with control bytes, device counts
   // beyond the layout, a backend name filling its field: the observer clamps and cleans them.
   const std::string prefix = test_prefix("hostile");
+  SegmentsRemovedAtEnd removed{prefix};
   auto states = LatestWriter::create(segment_name(prefix, ChannelKind::device_states), ChannelKind::device_states,
                                      sizeof(DeviceStatesRecord));
   auto samples = LatestWriter::create(segment_name(prefix, ChannelKind::sim_samples), ChannelKind::sim_samples,
