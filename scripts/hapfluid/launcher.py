@@ -178,6 +178,10 @@ class Stack:
         log = open(self.out / "logs" / f"{name}.log", "w")
 
         def preexec():
+            # Every service must be stoppable by the SIGINT stop() sends, even when this launcher
+            # inherited SIGINT ignored (a background job of a non-interactive shell).
+            signal.signal(signal.SIGINT, signal.SIG_DFL)
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
             if nice:
                 try_nice(nice)
             if cpus:
@@ -185,7 +189,7 @@ class Stack:
         if fifo_priority and can_use_fifo(fifo_priority):
             args = ["chrt", "-f", str(fifo_priority)] + list(args)
         p = subprocess.Popen([str(a) for a in args], stdout=subprocess.PIPE if stdout_pipe else log,
-                             stderr=log, text=True, preexec_fn=preexec if nice or cpus else None)
+                             stderr=log, text=True, preexec_fn=preexec)
         self.procs.append((name, p, log))
         self.started_at[name] = time.monotonic()  # CLOCK_MONOTONIC, as the processes' *_ns stamps
         return p
@@ -223,6 +227,12 @@ class Stack:
                     p.kill()
                     p.wait()
                     log.write(f"\nhapfluid: {name} did not stop within {timeout_s} s of SIGINT: killed\n")
+                if p.returncode == -signal.SIGINT:
+                    # Stopped so early in its start that it had not taken over SIGINT yet: the
+                    # stop asked for, not a failure.
+                    log.write(f"\nhapfluid: {name} stopped by SIGINT while it started\n")
+                    log.flush()
+                    return 0
             log.flush()
             return p.returncode
         return None

@@ -1,3 +1,5 @@
-from .server import main
+import sys
 
-main()
+from . import run
+
+sys.exit(run())
