@@ -7,7 +7,7 @@ include(GoogleTest)
 # (gtest_discover_tests would read a second as a property name); `slow` keeps it out of
 # `make check`.
 function(hapfluid_add_gtest name)
-  cmake_parse_arguments(T "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "" "TIMEOUT;TEST_FILTER" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
@@ -16,10 +16,15 @@ function(hapfluid_add_gtest name)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
   target_compile_definitions(${name} PRIVATE
     HAPFLUID_SOURCE_DIR="${HAPFLUID_SOURCE_DIR}" HAPFLUID_BINARY_DIR="${CMAKE_BINARY_DIR}")
+  set(filter)
+  if(T_TEST_FILTER)
+    set(filter TEST_FILTER "${T_TEST_FILTER}")
+  endif()
   gtest_discover_tests(${name}
     WORKING_DIRECTORY ${HAPFLUID_SOURCE_DIR}
     PROPERTIES TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS}"
-    DISCOVERY_TIMEOUT 60)
+    DISCOVERY_TIMEOUT 60
+    ${filter})
 endfunction()
 
 # hapfluid_add_bench(NAME SOURCES ... LIBS ...)

@@ -13,39 +13,12 @@ namespace hapfluid::sim {
 namespace {
 
 #ifdef HAPFLUID_WITH_VULKAN
-class VulkanLiveSolver final : public LiveSolver {
- public:
-  VulkanLiveSolver(SimulationModel model, const vulkan::VulkanSolverOptions& options)
-      : solver_(std::move(model), options) {}
-  const SimulationModel& model() const override { return solver_.model(); }
-  double time_s() const override { return solver_.time_s(); }
-  std::uint64_t steps() const override { return solver_.steps(); }
-  void set_device_state(std::size_t device, const DeviceState& state) override { solver_.set_device_state(device, state); }
-  double stable_time_step() const override { return solver_.stable_time_step(); }
-  // One step is one or two submissions (two with dynamic bodies: the host integrates them in
-  // between, so bodies and couplings are on the host after every step).
-  void step(double dt) override { solver_.step(dt); }
-  // Reads the particles back first; names the first non-finite particle or body.
-  void sync_and_check_finite() override { solver_.check_finite(); }
-  const char* backend() const override { return "vulkan"; }
-  ComputeDevice device() const override {
-    const vulkan::DeviceDescription& d = solver_.device();
-    return {d.name, d.type, d.driver};
-  }
-  int threads() const override { return 0; }
-  std::uint64_t clamped_particle_count() const override { return solver_.clamped_particle_count(); }
-  PhaseTimes phase_times() const override { return solver_.phase_times(); }
-
- private:
-  vulkan::VulkanSolver solver_;
-};
-
 std::unique_ptr<LiveSolver> make_vulkan(const SimulationModel& model, const LiveBackendOptions& o) {
   vulkan::VulkanSolverOptions options;
   options.context.device = vulkan::parse_device_preference(o.vulkan_device);
   // No per-pass timestamps in live runs: their read-back would be one more wait per step.
   options.timestamps = false;
-  return std::make_unique<VulkanLiveSolver>(model, options);
+  return std::make_unique<vulkan::VulkanSolver>(model, options);
 }
 #endif
 
@@ -128,9 +101,9 @@ LiveBackend choose_live_backend(const config::Scene& scene, const LiveBackendOpt
   }
 
   // auto: the rule in live_backend.hpp.
-  if (model.params.solver != config::PressureSolver::wcsph) {
-    const std::string why = std::string("the Vulkan backend runs fluid.solver = \"wcsph\" only, this scene uses \"") +
-                            config::to_string(model.params.solver) + "\"";
+  if (model.params.solver == config::PressureSolver::dfsph && model.body_particles.size() > 0) {
+    const std::string why = "the Vulkan backend runs fluid.solver = \"dfsph\" without dynamic bodies so far, this scene "
+                            "has " + std::to_string(model.body_particles.size()) + " dynamic body particles";
     log::Line(log::Level::notice) << "notice: --backend auto: " << why << "; running on the cpu backend";
     r.solver = make_cpu();
     r.reason = "auto: " + why;

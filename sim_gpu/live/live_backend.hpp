@@ -5,8 +5,8 @@
 //           with the cause and the fix when no Vulkan device can run the scene.
 //   auto    (the default) Vulkan on any usable device (GPU or lavapipe) IF it keeps up with the
 //           wall clock on this scene, else the faster backend, said loudly:
-//             1. a scene whose fluid.solver the Vulkan backend does not run (it runs wcsph),
-//                or no usable Vulkan device -> cpu, with a one-line notice saying why;
+//             1. a scene the Vulkan backend does not run yet (dfsph with dynamic bodies), or
+//                no usable Vulkan device -> cpu, with a one-line notice saying why;
 //             2. a probe: the scene's first ~0.3 s (at most 0.6 s of wall time) stepped on a
 //                throw-away Vulkan solver, devices at their start pose. Real-time factor
 //                >= 1.1 (10% headroom for publishing and the other processes) -> vulkan;

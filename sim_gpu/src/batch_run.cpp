@@ -17,11 +17,12 @@ namespace hapfluid::sim {
 namespace {
 
 std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchResult& r, double dt_min, double dt_max,
-                       const std::string& error) {
+                       const std::string& error, const ExtraStats& extra) {
   const PhaseTimes t = solver.phase_times();
   const SolverIterations it = solver.iterations();
   const double steps = static_cast<double>(r.steps);
-  StatsJson j = batch_stats({&solver.model(), &o, &r, dt_min, dt_max, t, solver.clamped_particle_count(), error}, o.backend);
+  StatsJson j = batch_stats({&solver.model(), &o, &r, dt_min, dt_max, t, solver.clamped_particle_count(), error},
+                           solver.backend());
   j["solver"] = solver.method();
   j["threads"] = solver.threads();
   auto per_step = [&](double n) { return steps > 0 ? n / steps : 0.0; };
@@ -30,6 +31,7 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
                             {"viscosity_per_step", per_step(static_cast<double>(it.viscosity_iterations))},
                             {"explicit_viscosity_steps", it.explicit_viscosity_steps},
                             {"unconverged_solves", it.unconverged_solves},
+                            {"budget_overruns", it.budget_overruns},
                             {"max_mean_density_error", it.max_density_error}};
   j["phase_ms_per_step"] = {{"neighbour_search", per_step_ms(t.neighbour_search_s, steps)},
                             {"density", per_step_ms(t.density_s, steps)},
@@ -37,6 +39,7 @@ std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchR
                             {"pressure_solve", per_step_ms(t.pressure_s, steps)},
                             {"bodies", per_step_ms(t.bodies_s, steps)},
                             {"integration", per_step_ms(t.integration_s, steps)}};
+  if (extra) extra(solver, j);
   return config::json_text(j);
 }
 
@@ -52,12 +55,17 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
     throw std::runtime_error("--backend " + o.backend + ": this build has the cpu backend only (use cpu or auto)");
   if (o.threads < 1 || o.threads > kMaxWorkerThreads)
     throw std::runtime_error("--threads " + std::to_string(o.threads) + ": must be 1.." + std::to_string(kMaxWorkerThreads));
+  return run_batch_with(o, progress, [&](SimulationModel model) { return make_cpu_solver(std::move(model), o.threads); });
+}
+
+BatchResult run_batch_with(const BatchOptions& o, std::ostream& progress, const SolverFactory& make_solver,
+                           const ExtraStats& extra) {
   const config::Scene scene = config::load_scene(o.scene);
   const double duration = o.duration_s > 0 ? o.duration_s : scene.duration_s;
-  // The scene loads and builds before the output folder is touched: a bad scene leaves a
-  // previous run there as it was. From here on, nothing of the previous run may remain to pass
-  // for this run's outputs.
-  std::unique_ptr<Solver> solver_ptr = make_cpu_solver(build_model(scene), o.threads);
+  // The scene loads and builds (and the backend starts) before the output folder is touched: a
+  // bad scene leaves a previous run there as it was. From here on, nothing of the previous run
+  // may remain to pass for this run's outputs.
+  std::unique_ptr<Solver> solver_ptr = make_solver(build_model(scene));
   Solver& solver = *solver_ptr;
   const SimulationModel& m = solver.model();
   std::filesystem::create_directories(o.out / "particles");
@@ -92,7 +100,8 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
     export_frame(0);
     for (int k = 0; k < frames; ++k) {
       const double t0 = k * frame, t1 = std::min(duration, (k + 1) * frame);
-      const int substeps = solver.advance(t1 - t0, set_devices);
+      const int substeps =
+          m.couplings.empty() ? solver.advance(t1 - t0) : solver.advance(t1 - t0, set_devices);
       const double dt = (t1 - t0) / substeps;
       dt_min = std::min(dt_min, dt), dt_max = std::max(dt_max, dt);
       solver.sync_and_check_finite();
@@ -120,10 +129,10 @@ BatchResult run_batch(const BatchOptions& options, std::ostream& progress) {
   }
   r.wall_time_s = elapsed();
   if (!error.empty()) {
-    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, error));
+    write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, error, extra));
     throw std::runtime_error(error);
   }
-  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, ""));
+  write_text_atomically(o.out / "stats.json", stats_json(solver, o, r, dt_min, dt_max, "", extra));
   return r;
 }
 

@@ -67,29 +67,8 @@ DfsphSolver::DfsphSolver(SimulationModel model, int threads)
   detail::set_body_particle_velocities(m_);
   coupling_->init(m_, slots);
   const SimulationParams& p = m_.params;
-  bool low[3], high[3];
-  for (int a = 0; a < 3; ++a) low[a] = p.clamp_lo[a] < p.box_lo[a], high[a] = p.clamp_hi[a] > p.box_hi[a];
-  walls_ = make_wall_map(p.box_lo, p.box_hi, low, high, p.incompressible.kernel, p.particle_spacing_m);
-  {
-    const SortedSolids& st = m_.static_solids;
-    std::vector<std::uint32_t> keep;
-    for (std::uint32_t k = 0; k < st.size(); ++k)
-      if (st.body[k] != kWall) keep.push_back(k);
-    std::vector<float> x(keep.size()), y(keep.size()), z(keep.size());
-    for (std::size_t q = 0; q < keep.size(); ++q) x[q] = st.x[keep[q]], y[q] = st.y[keep[q]], z[q] = st.z[keep[q]];
-    CellSort sort;
-    sort.sort(p.grid, x.data(), y.data(), z.data(), keep.size());
-    fluid_statics_.resize(keep.size());
-    for (std::size_t q = 0; q < keep.size(); ++q) {
-      const std::uint32_t k = keep[sort.order[q]];
-      fluid_statics_.x[q] = st.x[k], fluid_statics_.y[q] = st.y[k], fluid_statics_.z[q] = st.z[k];
-      fluid_statics_.vx[q] = fluid_statics_.vy[q] = fluid_statics_.vz[q] = 0;
-      fluid_statics_.volume[q] = st.volume[k], fluid_statics_.viscosity[q] = st.viscosity[k];
-      fluid_statics_.no_slip[q] = st.no_slip[k], fluid_statics_.pressure[q] = 0;
-      fluid_statics_.body[q] = st.body[k], fluid_statics_.source[q] = st.source[k];
-    }
-    fluid_statics_.cell_start = sort.cell_start;
-  }
+  walls_ = domain_wall_map(p);
+  fluid_statics_ = static_solids_beside_walls(m_);
   if (p.incompressible.settle_s > 0) settle(p.incompressible.settle_s);
   // Density and pressure of the initial state, for a frame exported before the first step.
   sort_and_build_pairs();

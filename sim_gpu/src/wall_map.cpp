@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "hapfluid/sim/neighbour_grid.hpp"
+
 namespace hapfluid::sim {
 namespace {
 
@@ -218,6 +220,35 @@ WallMap make_wall_map(const float lo[3], const float hi[3], const bool low_wall[
     m.friction_tangent[k] = static_cast<float>(tangent);
   }
   return m;
+}
+
+WallMap domain_wall_map(const SimulationParams& p) {
+  bool low[3], high[3];
+  for (int a = 0; a < 3; ++a) low[a] = p.clamp_lo[a] < p.box_lo[a], high[a] = p.clamp_hi[a] > p.box_hi[a];
+  return make_wall_map(p.box_lo, p.box_hi, low, high, p.incompressible.kernel, p.particle_spacing_m);
+}
+
+SortedSolids static_solids_beside_walls(const SimulationModel& model) {
+  const SortedSolids& st = model.static_solids;
+  std::vector<std::uint32_t> keep;
+  for (std::uint32_t k = 0; k < st.size(); ++k)
+    if (st.body[k] != kWall) keep.push_back(k);
+  std::vector<float> x(keep.size()), y(keep.size()), z(keep.size());
+  for (std::size_t q = 0; q < keep.size(); ++q) x[q] = st.x[keep[q]], y[q] = st.y[keep[q]], z[q] = st.z[keep[q]];
+  CellSort sort;
+  sort.sort(model.params.grid, x.data(), y.data(), z.data(), keep.size());
+  SortedSolids out;
+  out.resize(keep.size());
+  for (std::size_t q = 0; q < keep.size(); ++q) {
+    const std::uint32_t k = keep[sort.order[q]];
+    out.x[q] = st.x[k], out.y[q] = st.y[k], out.z[q] = st.z[k];
+    out.vx[q] = out.vy[q] = out.vz[q] = 0;
+    out.volume[q] = st.volume[k], out.viscosity[q] = st.viscosity[k];
+    out.no_slip[q] = st.no_slip[k], out.pressure[q] = 0;
+    out.body[q] = st.body[k], out.source[q] = st.source[k];
+  }
+  out.cell_start = sort.cell_start;
+  return out;
 }
 
 }  // namespace hapfluid::sim

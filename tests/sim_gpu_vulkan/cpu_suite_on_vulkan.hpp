@@ -1,7 +1,7 @@
 // Runs the CPU backend's validation tests (tests/sim_gpu/test_*.cpp), unchanged, on the Vulkan
 // backend: the same validation physics must hold on both, so the test bodies, scenes,
 // durations and criteria are the CPU suite's own source, compiled a second time with
-// `CpuSolver` standing for VulkanBackendSolver below. A change to a CPU validation test changes
+// `CpuSolver` standing for VulkanBackendSolver below, and `make_cpu_solver` making one. A change to a CPU validation test changes
 // its Vulkan run with it; nothing is restated here.
 //
 // Use, in a translation unit of its own (the CPU files each have their own anonymous helpers):
@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include <functional>
+#include <memory>
 #include <string>
 
 // The CPU suite's helpers (temporary scenes, test meshes, run_for on a CpuSolver), included
@@ -29,14 +30,15 @@
 
 namespace hapfluid::sim {
 
-// CpuSolver's interface (the part the validation tests use) on the Vulkan backend. model()
-// reflects the device after every step/advance: the particles are downloaded then (a few
-// thousand in these scenes, small next to the steps of a frame), as the tests read them.
-class VulkanBackendSolver {
+// CpuSolver's interface (the part the validation tests use) and the Solver interface on the
+// Vulkan backend. model() reflects the device after every step/advance: the particles are
+// downloaded then (a few thousand in these scenes, small next to the steps of a frame), as the
+// tests read them.
+class VulkanBackendSolver final : public Solver {
  public:
   // `threads` is the CPU backend's worker count; the device has its own parallelism.
   VulkanBackendSolver(SimulationModel model, int /*threads*/) : gpu_(std::move(model), validated()) {}
-  ~VulkanBackendSolver() {
+  ~VulkanBackendSolver() override {
     const auto counts = gpu_.context().validation_counts();
     EXPECT_EQ(counts.errors, 0u) << "Khronos validation errors on " << gpu_.device().name;
     EXPECT_EQ(counts.warnings, 0u) << "Khronos validation warnings on " << gpu_.device().name;
@@ -45,24 +47,29 @@ class VulkanBackendSolver {
   VulkanBackendSolver(const VulkanBackendSolver&) = delete;
   VulkanBackendSolver& operator=(const VulkanBackendSolver&) = delete;
 
-  const SimulationModel& model() const { return gpu_.model(); }
-  const SimulationParams& params() const { return gpu_.params(); }
-  double time_s() const { return gpu_.time_s(); }
-  std::uint64_t steps() const { return gpu_.steps(); }
-  std::uint64_t clamped_particle_count() const { return gpu_.clamped_particle_count(); }
-  double stable_time_step() const { return gpu_.stable_time_step(); }
-  void set_device_state(std::size_t device, const DeviceState& state) { gpu_.set_device_state(device, state); }
+  const SimulationModel& model() const override { return gpu_.model(); }
+  double time_s() const override { return gpu_.time_s(); }
+  std::uint64_t steps() const override { return gpu_.steps(); }
+  std::uint64_t clamped_particle_count() const override { return gpu_.clamped_particle_count(); }
+  double stable_time_step() const override { return gpu_.stable_time_step(); }
+  void set_device_state(std::size_t device, const DeviceState& state) override { gpu_.set_device_state(device, state); }
+  PhaseTimes phase_times() const override { return gpu_.phase_times(); }
+  SolverIterations iterations() const override { return gpu_.iterations(); }
+  const char* backend() const override { return gpu_.backend(); }
+  ComputeDevice device() const override { return gpu_.device(); }
+  int threads() const override { return gpu_.threads(); }
 
-  void step(double dt) {
+  void step(double dt) override {
     gpu_.step(dt);
     gpu_.sync_particles();
   }
-  int advance(double duration_s, const std::function<void(double)>& before_substep = {}) {
+  int advance(double duration_s, const std::function<void(double)>& before_substep = {}) override {
     const int substeps = gpu_.advance(duration_s, before_substep);
     gpu_.sync_particles();
     return substeps;
   }
   void check_finite() { gpu_.check_finite(); }
+  void sync_and_check_finite() override { gpu_.check_finite(); }
 
   const vulkan::VulkanSolver& vulkan() const { return gpu_; }
 
@@ -93,6 +100,14 @@ inline void run_for(VulkanBackendSolver& s, double seconds, double frame = 0.01)
 }  // namespace test
 }  // namespace hapfluid::sim
 
+namespace hapfluid::sim {
+// make_cpu_solver of the CPU suite: the Vulkan backend, for either method.
+inline std::unique_ptr<Solver> make_vulkan_suite_solver(SimulationModel model, int threads) {
+  return std::make_unique<VulkanBackendSolver>(std::move(model), threads);
+}
+}  // namespace hapfluid::sim
+
 // From here on, the CPU suite's source runs on the device.
 #define CpuSolver VulkanBackendSolver
+#define make_cpu_solver make_vulkan_suite_solver
 #define TEST(suite, name) GTEST_TEST(Vulkan##suite, name)

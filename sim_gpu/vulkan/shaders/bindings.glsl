@@ -3,7 +3,8 @@
 //
 // Naming: F_ fluid in the persistent order (the order of the last sort), S_ fluid sorted this
 // step, W_ static solids (walls, static bodies; sorted once), B_ dynamic body particles
-// (grouped per body), V_ the body-particle view sorted by cell this step. T_ are texel views
+// (grouped per body), V_ the body-particle view sorted by cell this step, D_ the incompressible
+// solver's fields (per sorted particle unless marked F). T_ are texel views
 // (samplerBuffer) of the arrays neighbour loops read; the rest are storage buffers.
 #ifndef HAPFLUID_VULKAN_BINDINGS
 #define HAPFLUID_VULKAN_BINDINGS
@@ -49,6 +50,16 @@
 #define BINDING_BODY_CHUNKS 38  // per reduction chunk: uvec4 (body, first, count, 0)
 #define BINDING_BODY_PARTIALS 39  // per chunk: 4 vec4 (fluid f, fluid t, contact f, contact t)
 #define BINDING_BODY_SUMS 40    // per body: 4 vec4
-#define BINDING_COUNT 41
+#define BINDING_D_PARTICLE 41  // vec4, 12 per sorted particle then 2 per particle in F order
+                                // (dfsph_common.glsl: D_FIELD ... D_DV_F)
+#define BINDING_D_SOLVE 42    // uint: indirect dispatch arguments, solve state, counters,
+                              // per-workgroup partial sums (dfsph_common.glsl)
+#define BINDING_T_D_WALLS 43  // float texels: the domain walls' volume map (wall_map.hpp)
+#define BINDING_T_D_PARTICLE 44  // texel view of D_PARTICLE for neighbour reads
+#define BINDING_D_LIST_INDEX 45  // uint: each sorted particle's fluid neighbours, LIST_CAPACITY each
+#define BINDING_D_LIST_TERM 46   // vec4 per listed pair: V_j grad W_ij (1/m), V_j W_ij
+#define BINDING_T_D_LIST_INDEX 47
+#define BINDING_T_D_LIST_TERM 48
+#define BINDING_COUNT 49
 
 #endif

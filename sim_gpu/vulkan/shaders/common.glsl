@@ -16,6 +16,13 @@ layout(std140, set = 0, binding = BINDING_PARAMS) uniform Params {
   vec4 corrections;   // clamp of the pressure force's first-moment correction c: min, max
                       // (gradient_correction.hpp); contact damping alpha rho0 c h, Pa s
                       // (contact_damping.hpp); unused
+  vec4 dfsph_kernel;  // incompressible solver: cubic spline h^2, 1 / h, W scale, gradient scale
+  vec4 dfsph_a;       // fluid particle volume m / rho0; density and divergence tolerances; XSPH
+  vec4 dfsph_b;       // fewest neighbours of a divergence estimate; fluid viscosity (Pa s);
+                      // 0.01 h^2; settling: the velocity kept after a step (1 when running)
+  ivec4 dfsph_c;      // fewest density and divergence iterations, most iterations, workgroups
+                      // of 64 over the fluid
+  ivec4 dfsph_d;      // fluid neighbours a particle's list holds; unused
 } P;
 
 float h() { return P.kernel.x; }

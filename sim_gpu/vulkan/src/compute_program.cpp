@@ -13,7 +13,8 @@ VkDescriptorType binding_type(std::uint32_t binding) {
   switch (binding) {
     case BINDING_T_S_POS: case BINDING_T_S_VEL: case BINDING_T_S_DENSITY: case BINDING_T_CELL_START:
     case BINDING_T_W_A: case BINDING_T_W_B: case BINDING_T_W_C: case BINDING_T_W_CELL_START:
-    case BINDING_T_V_A: case BINDING_T_V_B: case BINDING_T_V_C: case BINDING_T_V_CELL_START:
+    case BINDING_T_V_A: case BINDING_T_V_B: case BINDING_T_V_C: case BINDING_T_V_CELL_START: case BINDING_T_D_WALLS: case BINDING_T_D_PARTICLE:
+    case BINDING_T_D_LIST_INDEX: case BINDING_T_D_LIST_TERM:
       return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     default:
       return VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
@@ -24,7 +25,10 @@ constexpr const char* kPassShaders[] = {
     "hash", "hash_bodies", "scan_local", "scan_blocks", "scan_add", "scatter", "order_cells", "gather_fluid",
     "gather_bodies", "density_cells", "body_contact_pressure", "fluid_forces_cells", "body_forces", "body_sums",
     "body_sums_final",
-    "body_update", "integrate_fluid", "adopt_sorted", "max_speed", "max_speed_final"};
+    "body_update", "integrate_fluid", "adopt_sorted", "max_speed", "max_speed_final", "dfsph_gather", "dfsph_density",
+    "dfsph_rate", "dfsph_check", "dfsph_apply", "dfsph_solve_end", "dfsph_forces", "dfsph_predict", "dfsph_visc_rhs",
+    "dfsph_visc_check", "dfsph_cg_apply", "dfsph_cg_alpha", "dfsph_cg_update", "dfsph_cg_check", "dfsph_cg_direction",
+    "dfsph_visc_end", "dfsph_integrate", "dfsph_adopt"};
 static_assert(sizeof(kPassShaders) / sizeof(kPassShaders[0]) == static_cast<int>(Pass::count));
 
 }  // namespace
@@ -144,6 +148,14 @@ void ComputeProgram::dispatch(VkCommandBuffer cb, Pass pass, std::uint32_t group
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
   vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(PushConstants), &push);
   vkCmdDispatch(cb, groups, 1, 1);
+}
+
+void ComputeProgram::dispatch_indirect(VkCommandBuffer cb, Pass pass, const Buffer& args, VkDeviceSize offset,
+                                       const PushConstants& push) const {
+  vkCmdBindPipeline(cb, VK_PIPELINE_BIND_POINT_COMPUTE, pipelines_[static_cast<int>(pass)]);
+  vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
+  vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(PushConstants), &push);
+  vkCmdDispatchIndirect(cb, args.handle(), offset);
 }
 
 }  // namespace hapfluid::sim::vulkan

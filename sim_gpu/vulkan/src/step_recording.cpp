@@ -2,38 +2,11 @@
 // timestamps between pass groups. Recorded once per substep count and re-submitted.
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 
+#include <functional>
+
+#include "recording.hpp"
+
 namespace hapfluid::sim::vulkan {
-namespace {
-
-std::uint32_t groups(std::uint32_t threads, std::uint32_t local) { return (threads + local - 1) / local; }
-
-void compute_barrier(VkCommandBuffer cb) {
-  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_SHADER_READ_BIT;
-  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
-  vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0,
-                       nullptr, 0, nullptr);
-}
-
-// Host writes (parameters, counters) before the first pass; device writes visible to the host
-// after the last one (the fence wait then makes them available to read).
-void host_to_compute_barrier(VkCommandBuffer cb) {
-  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-  barrier.srcAccessMask = VK_ACCESS_HOST_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_UNIFORM_READ_BIT;
-  vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_HOST_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, 0, 1, &barrier, 0, nullptr, 0,
-                       nullptr);
-}
-
-void compute_to_host_barrier(VkCommandBuffer cb) {
-  VkMemoryBarrier barrier{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-  barrier.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
-  barrier.dstAccessMask = VK_ACCESS_HOST_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT;
-  vkCmdPipelineBarrier(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-                       0, 1, &barrier, 0, nullptr, 0, nullptr);
-}
-
-}  // namespace
 
 void VulkanSolver::record_sort(VkCommandBuffer cb) {
   const ComputeProgram& p = *program_;
@@ -142,14 +115,16 @@ void VulkanSolver::record_steps(VkCommandBuffer cb, int substeps) {
   check(vkBeginCommandBuffer(cb, &begin), "vkBeginCommandBuffer");
   const bool timing = substeps > 0 && timed(substeps);
   std::uint32_t query = 0;
-  auto stamp = [&] {
+  const std::function<void()> stamp = [&] {
     if (timing) vkCmdWriteTimestamp(cb, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, queries_, query++);
   };
   if (timing) vkCmdResetQueryPool(cb, queries_, 0, queries_per_step_ * static_cast<std::uint32_t>(substeps) + 2);
   host_to_compute_barrier(cb);
   stamp();
   const ComputeProgram& p = *program_;
-  if (substeps == 0) {
+  if (substeps == 0 && dfsph_) {
+    record_dfsph_initial(cb);
+  } else if (substeps == 0) {
     // The initial state (as CpuSolver's constructor): particles in cell order with their
     // density and pressure, for a frame exported before the first step.
     record_sort(cb);
@@ -159,7 +134,8 @@ void VulkanSolver::record_steps(VkCommandBuffer cb, int substeps) {
     p.dispatch(cb, Pass::adopt_sorted, groups(fluid_count_, 64));
     compute_barrier(cb);
   }
-  for (int s = 0; s < substeps; ++s) {
+  for (int s = 0; s < substeps && dfsph_; ++s) record_dfsph_step(cb, stamp);
+  for (int s = 0; s < substeps && !dfsph_; ++s) {
     record_sort(cb);
     stamp();
     p.dispatch(cb, Pass::density_cells, groups(cell_count_, 64));

@@ -9,6 +9,7 @@
 #include "../shaders/bindings.glsl"
 #include "hapfluid/sim/finite_state.hpp"
 #include "hapfluid/sim/gradient_correction.hpp"
+#include "hapfluid/sim/wall_map.hpp"
 
 namespace hapfluid::sim::vulkan {
 namespace {
@@ -24,8 +25,39 @@ struct ParamsBlock {
   std::int32_t grid_dims[4];
   std::uint32_t counts[4];  // fluid, static solids, body particles, bodies
   float corrections[4];      // clamp of the first-moment correction c: min, max; contact damping, Pa s
+  float dfsph_kernel[4];     // h^2, 1 / h, W scale, gradient scale
+  float dfsph_a[4];          // fluid volume, density and divergence tolerances, XSPH fraction
+  float dfsph_b[4];          // fewest neighbours of a divergence estimate, fluid viscosity, 0.01 h^2, velocity kept
+  std::int32_t dfsph_c[4];   // fewest density and divergence iterations, most iterations, fluid workgroups of 64
+  std::int32_t dfsph_d[4];   // neighbour list capacity; unused
 };
-static_assert(sizeof(ParamsBlock) == 144);
+static_assert(sizeof(ParamsBlock) == 224);
+
+// The head of the solve state (shaders/dfsph_common.glsl): counters the host reads and clears.
+constexpr std::uint32_t kSolveDensityIts = 7, kSolveDivergenceIts = 8, kSolveViscosityIts = 9, kSolveUnconverged = 10,
+                        kSolveExplicitViscosity = 11, kSolveLastDensityError = 12, kSolveMaxDensityError = 13,
+                        kSolveListOverflow = 19, kSolveMostDensityIts = 20, kSolveMostDivergenceIts = 21,
+                        kSolveMostViscosityIts = 22, kSolveBudgetOverruns = 23, kSolvePartials = 32;
+
+// Room in each particle's neighbour list: half again the neighbours of a particle in the bulk at
+// rest (the lattice points within h), a multiple of 8. A fluid compressed by half again has
+// failed long before; a list that would overflow stops the run with an error.
+std::uint32_t list_capacity(const SimulationParams& p) {
+  const double ratio = p.incompressible.kernel.h / p.particle_spacing_m;
+  const std::uint32_t bulk = static_cast<std::uint32_t>(std::ceil(4.0 / 3.0 * 3.14159265358979 * ratio * ratio * ratio));
+  return (bulk * 3 / 2 + 7) / 8 * 8;
+}
+
+// The walls' volume map as the shaders read it (dfsph_common.glsl): a header, then its tables.
+std::vector<float> wall_map_words(const WallMap& w) {
+  std::vector<float> out(20, 0.0f);
+  for (int k = 0; k < 6; ++k) out[k] = w.enabled[k] ? 1.0f : 0.0f, out[6 + k] = w.face[k];
+  out[12] = w.offset_m, out[13] = w.gradient_scale, out[14] = w.h, out[15] = w.du;
+  out[16] = static_cast<float>(w.share.size());
+  for (const std::vector<float>* t : {&w.share, &w.slope, &w.friction_normal, &w.friction_tangent})
+    out.insert(out.end(), t->begin(), t->end());
+  return out;
+}
 
 constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 constexpr VkBufferUsageFlags kTexel = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
@@ -54,15 +86,27 @@ struct VulkanSolver::Buffers {
   Buffer w_a, w_b, w_c, w_cell_start;
   Buffer b_pos, b_vel, b_rest, b_force, b_contact, b_pressure, v_a, v_b, v_c;
   Buffer body_state, body_chunks, body_partials, body_sums;
+  Buffer d_particle, d_solve, d_walls, d_list_index, d_list_term;
+  TexelView t_d_walls, t_d_particle, t_d_list_index, t_d_list_term;
   TexelView t_s_pos, t_s_vel, t_s_density, t_cell_start, t_w_a, t_w_b, t_w_c, t_w_cell_start;
   TexelView t_v_a, t_v_b, t_v_c, t_v_cell_start;
 };
 
 VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& options) : m_(std::move(model)) {
-  if (m_.params.solver != config::PressureSolver::wcsph)
-    throw std::runtime_error(m_.scene_name + ": the Vulkan backend runs fluid.solver = \"wcsph\" only, this scene uses \"" +
-                             std::string(config::to_string(m_.params.solver)) +
-                             "\" (run it with --backend cpu, or set fluid.solver = \"wcsph\")");
+  dfsph_ = m_.params.solver == config::PressureSolver::dfsph;
+  if (dfsph_ && m_.body_particles.size() > 0)
+    throw std::runtime_error(m_.scene_name + ": the Vulkan backend runs fluid.solver = \"dfsph\" without dynamic bodies so " +
+                             "far, and this scene has " + std::to_string(m_.body_particles.size()) +
+                             " dynamic body particles (run it with --backend cpu)");
+  if (dfsph_) {
+    const int cap = m_.params.incompressible.max_iterations;
+    divergence_budget_ = IterationBudget(cap), density_budget_ = IterationBudget(cap);
+    viscosity_budget_ = IterationBudget(cap);
+    // The fluid meets the static bodies as particles and the walls as their volume map.
+    fluid_statics_ = static_solids_beside_walls(m_);
+    viscous_ = m_.params.fluid_viscosity_pa_s > 0;
+    for (const RigidBody& b : m_.bodies) viscous_ = viscous_ || b.viscosity_pa_s > 0;
+  }
   context_ = std::make_unique<Context>(options.context);
   program_ = std::make_unique<ComputeProgram>(*context_);
   devices_.resize(m_.devices.size());
@@ -81,7 +125,7 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
   }
 
   fluid_count_ = static_cast<std::uint32_t>(m_.fluid.size());
-  solid_count_ = static_cast<std::uint32_t>(m_.static_solids.size());
+  solid_count_ = static_cast<std::uint32_t>(fluid_statics().size());
   body_particle_count_ = static_cast<std::uint32_t>(bp.size());
   cell_count_ = static_cast<std::uint32_t>(m_.params.grid.cell_count());
   // The body cell starts follow the fluid's in one buffer, at an offset a texel view may start at.
@@ -100,8 +144,9 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
   check(vkCreateFence(context_->device(), &fence, nullptr, &fence_), "vkCreateFence");
   if (options.timestamps && context_->timestamps_supported()) {
     // Timestamps: one at the start, then after sort, density, forces and integration of each
-    // substep, and after the CFL maxima: 4 N + 2 for N substeps.
-    queries_per_step_ = 4;
+    // substep (dfsph: sort, density, divergence solve, forces and viscosity, density solve,
+    // integration), and after the CFL maxima: 4 N + 2 (6 N + 2) for N substeps.
+    queries_per_step_ = dfsph_ ? 6 : 4;
     query_capacity_ = queries_per_step_ * kMaxTimedSubsteps + 2;
     VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
     info.queryType = VK_QUERY_TYPE_TIMESTAMP;
@@ -124,11 +169,56 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
     record_body_step(body_head_, body_tail_, false);
     record_body_step(VK_NULL_HANDLE, body_tail_maxima_, true);
   }
+  if (dfsph_ && m_.params.incompressible.settle_s > 0) settle(m_.params.incompressible.settle_s);
   VkCommandBuffer cb = allocate_command_buffer();
-  recorded_[0] = cb;
+  recorded_[recording_key(0)] = cb;
   record_steps(cb, 0);
   submit_and_wait(cb);
   read_results(0);
+}
+
+void VulkanSolver::settle(double duration_s) {
+  const double dt = m_.params.fixed_dt_s > 0 ? m_.params.fixed_dt_s : m_.params.max_dt_s;
+  const int steps = std::max(1, static_cast<int>(std::ceil(duration_s / dt - 1e-9)));
+  velocity_kept_ = 0.8f;  // DfsphSolver's settling damping
+  for (int k = 0; k < steps; ++k) step_many(dt, 1);
+  velocity_kept_ = 1.0f;
+  time_s_ = 0;
+  steps_ = 0;
+  clamped_ = 0;
+  pass_times_ = {};
+  iterations_ = {};
+}
+
+const Buffer& VulkanSolver::dfsph_solve_buffer() const { return b_->d_solve; }
+
+void VulkanSolver::read_solver_counters() {
+  if (!dfsph_) return;
+  std::uint32_t* solve = static_cast<std::uint32_t*>(b_->d_solve.mapped());
+  iterations_.density_iterations += solve[kSolveDensityIts];
+  iterations_.divergence_iterations += solve[kSolveDivergenceIts];
+  iterations_.viscosity_iterations += solve[kSolveViscosityIts];
+  iterations_.unconverged_solves += solve[kSolveUnconverged];
+  iterations_.explicit_viscosity_steps += solve[kSolveExplicitViscosity];
+  float last = 0, largest = 0;
+  std::memcpy(&last, &solve[kSolveLastDensityError], sizeof last);
+  std::memcpy(&largest, &solve[kSolveMaxDensityError], sizeof largest);
+  iterations_.last_density_error = last;
+  iterations_.max_density_error = std::max(iterations_.max_density_error, static_cast<double>(largest));
+  const bool ran_out = solve[kSolveBudgetOverruns] > 0;
+  iterations_.budget_overruns += solve[kSolveBudgetOverruns];
+  divergence_budget_.observe(static_cast<int>(solve[kSolveMostDivergenceIts]), ran_out);
+  density_budget_.observe(static_cast<int>(solve[kSolveMostDensityIts]), ran_out);
+  viscosity_budget_.observe(static_cast<int>(solve[kSolveMostViscosityIts]), ran_out);
+  for (std::uint32_t k : {kSolveDensityIts, kSolveDivergenceIts, kSolveViscosityIts, kSolveUnconverged,
+                          kSolveExplicitViscosity, kSolveMaxDensityError, kSolveMostDensityIts, kSolveMostDivergenceIts,
+                          kSolveMostViscosityIts, kSolveBudgetOverruns})
+    solve[k] = 0;
+  if (solve[kSolveListOverflow] > 0)
+    throw std::runtime_error(m_.scene_name + ": a fluid particle has " + std::to_string(solve[kSolveListOverflow]) +
+                             " fluid neighbours, more than the " + std::to_string(list_capacity(m_.params)) +
+                             " its list holds (1.5 times the bulk at rest): the fluid is compressed far beyond rest "
+                             "density at t = " + std::to_string(time_s_) + " s");
 }
 
 VulkanSolver::~VulkanSolver() {
@@ -200,6 +290,21 @@ void VulkanSolver::create_buffers() {
   b.body_chunks = Buffer(c, vec4 * chunks, kStorage, MemoryUse::device);
   b.body_partials = Buffer(c, vec4 * 4 * chunks, kStorage, MemoryUse::device);
   b.body_sums = Buffer(c, vec4 * 4 * bodies, kStorage, MemoryUse::host);
+  // The incompressible solver's fields (one element each for wcsph: every binding is written).
+  const VkDeviceSize nd = dfsph_ ? nf : 1;
+  b.d_particle = Buffer(c, vec4 * 14 * nd, kTexel, MemoryUse::device);
+  b.t_d_particle = TexelView(c, b.d_particle, kVec4);
+  const VkDeviceSize listed = dfsph_ ? nf * list_capacity(m_.params) : 1;
+  b.d_list_index = Buffer(c, u32 * listed, kTexel, MemoryUse::device);
+  b.d_list_term = Buffer(c, vec4 * listed, kTexel, MemoryUse::device);
+  b.t_d_list_index = TexelView(c, b.d_list_index, kUint);
+  b.t_d_list_term = TexelView(c, b.d_list_term, kVec4);
+  b.d_solve = Buffer(c, u32 * (kSolvePartials + 4 * groups(static_cast<std::uint32_t>(nd), 64)),
+                     kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, MemoryUse::host);
+  const std::vector<float> walls = dfsph_ ? wall_map_words(domain_wall_map(m_.params)) : std::vector<float>(20, 0.0f);
+  b.d_walls = Buffer(c, 4 * walls.size(), kTexel, MemoryUse::device);
+  b.d_walls.upload(walls.data(), 4 * walls.size());
+  b.t_d_walls = TexelView(c, b.d_walls, VK_FORMAT_R32_SFLOAT);
 
   b.t_s_pos = TexelView(c, b.s_pos, kVec4);
   b.t_s_vel = TexelView(c, b.s_vel, kVec4);
@@ -256,6 +361,14 @@ void VulkanSolver::create_buffers() {
   p.bind_texel(BINDING_T_V_B, b.t_v_b);
   p.bind_texel(BINDING_T_V_C, b.t_v_c);
   p.bind_texel(BINDING_T_V_CELL_START, b.t_v_cell_start);
+  p.bind_storage(BINDING_D_PARTICLE, b.d_particle);
+  p.bind_storage(BINDING_D_SOLVE, b.d_solve);
+  p.bind_texel(BINDING_T_D_WALLS, b.t_d_walls);
+  p.bind_texel(BINDING_T_D_PARTICLE, b.t_d_particle);
+  p.bind_storage(BINDING_D_LIST_INDEX, b.d_list_index);
+  p.bind_storage(BINDING_D_LIST_TERM, b.d_list_term);
+  p.bind_texel(BINDING_T_D_LIST_INDEX, b.t_d_list_index);
+  p.bind_texel(BINDING_T_D_LIST_TERM, b.t_d_list_term);
   p.commit_bindings();
 }
 
@@ -270,12 +383,24 @@ void VulkanSolver::upload_model() {
   b.s_acc.upload(pack4(nf, f.ax.data(), f.ay.data(), f.az.data(), nullptr).data(), 16 * nf);
   b.s_density.upload(pack4(nf, f.density.data(), f.pressure.data(), f.volume.data(), f.volume_correction.data()).data(),
                      16 * nf);
+  if (dfsph_) {
+    // The solver's per-particle memory in F order, after the sorted fields (dfsph_common.glsl):
+    // warm starts of both solves, the last viscous change.
+    std::vector<float> warm(8 * nf, 0.0f);
+    for (std::size_t i = 0; i < nf; ++i) {
+      warm[8 * i] = f.density_stiffness_dt2[i], warm[8 * i + 1] = f.divergence_stiffness_dt[i];
+      warm[8 * i + 4] = f.viscous_dvx[i], warm[8 * i + 5] = f.viscous_dvy[i], warm[8 * i + 6] = f.viscous_dvz[i];
+    }
+    b.d_particle.upload(warm.data(), 4 * warm.size(), 16 * 12 * nf);
+    const std::vector<std::uint32_t> state(b.d_solve.size() / 4, 0);
+    b.d_solve.upload(state.data(), b.d_solve.size());
+  }
   const std::vector<std::uint32_t> zeros(std::max<std::size_t>(body_start_base_ + cell_count_ + 1, 4 + 2 * max_groups_), 0);
   b.reduce.upload(zeros.data(), 4 * (4 + 2 * max_groups_));  // the clamp counter starts at zero
   b.cell_count.upload(zeros.data(), 4 * 2 * cell_count_);
   b.cell_start.upload(zeros.data(), 4 * zeros.size());
 
-  const SortedSolids& s = m_.static_solids;
+  const SortedSolids& s = fluid_statics();
   const std::size_t ns = s.size();
   std::vector<float> body_index(ns);
   for (std::size_t i = 0; i < ns; ++i) body_index[i] = static_cast<float>(s.body[i]);
@@ -367,6 +492,16 @@ void VulkanSolver::write_params(float dt) {
   block.counts[3] = dynamic_bodies;
   block.corrections[0] = kGradientCorrectionMin, block.corrections[1] = kGradientCorrectionMax;
   block.corrections[2] = p.contact_damping_pa_s;
+  const IncompressibleParams& ip = p.incompressible;
+  block.dfsph_kernel[0] = ip.kernel.h2, block.dfsph_kernel[1] = ip.kernel.inv_h;
+  block.dfsph_kernel[2] = ip.kernel.w_scale, block.dfsph_kernel[3] = ip.kernel.grad_scale;
+  block.dfsph_a[0] = p.fluid_particle_mass_kg / p.rest_density_kg_m3;
+  block.dfsph_a[1] = ip.max_density_error, block.dfsph_a[2] = ip.max_divergence_error, block.dfsph_a[3] = ip.xsph_fraction;
+  block.dfsph_b[0] = static_cast<float>(ip.min_divergence_neighbours), block.dfsph_b[1] = p.fluid_viscosity_pa_s;
+  block.dfsph_b[2] = 0.01f * ip.kernel.h2, block.dfsph_b[3] = velocity_kept_;
+  block.dfsph_c[0] = ip.min_density_iterations, block.dfsph_c[1] = ip.min_divergence_iterations;
+  block.dfsph_c[2] = ip.max_iterations, block.dfsph_c[3] = static_cast<std::int32_t>(groups(fluid_count_, 64));
+  block.dfsph_d[0] = static_cast<std::int32_t>(list_capacity(p));
   b_->params.upload(&block, sizeof block);
 }
 
@@ -381,6 +516,12 @@ double VulkanSolver::stable_time_step() const {
   // CpuSolver::stable_time_step, term by term, with the maxima from the device.
   const SimulationParams& p = m_.params;
   if (p.fixed_dt_s > 0) return p.fixed_dt_s;
+  if (dfsph_) {
+    // DfsphSolver::stable_time_step without bodies: the velocity CFL and the scene's cap.
+    double dt = p.max_dt_s;
+    if (max_speed2_ > 0) dt = std::min(dt, p.cfl * p.particle_spacing_m / std::sqrt(static_cast<double>(max_speed2_)));
+    return dt;
+  }
   const double h = p.kernel.h;
   double dt = p.cfl * h / (p.speed_of_sound_m_s + std::sqrt(static_cast<double>(max_speed2_)));
   double mu_max = p.fluid_viscosity_pa_s;
@@ -460,15 +601,21 @@ VkCommandBuffer VulkanSolver::allocate_command_buffer() {
   return cb;
 }
 
+VulkanSolver::RecordingKey VulkanSolver::recording_key(int substeps) const {
+  if (!dfsph_ || substeps == 0) return {substeps, 0, 0, 0};
+  return {substeps, divergence_budget_.budget(), density_budget_.budget(), viscosity_budget_.budget()};
+}
+
 VkCommandBuffer VulkanSolver::command_buffer_for(int substeps) {
-  auto found = recorded_.find(substeps);
+  const RecordingKey key = recording_key(substeps);
+  auto found = recorded_.find(key);
   if (found != recorded_.end()) return found->second;
   // A handful of substep counts occur in a run (the CFL bound moves slowly); keep them all
   // recorded, but bound the cache.
   if (recorded_.size() > 16) {
     for (auto& [n, cb] : recorded_)
-      if (n != 0) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
-    std::erase_if(recorded_, [](const auto& e) { return e.first != 0; });
+      if (n[0] != 0) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
+    std::erase_if(recorded_, [](const auto& e) { return e.first[0] != 0; });
   }
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
   alloc.commandPool = context_->command_pool();
@@ -477,7 +624,7 @@ VkCommandBuffer VulkanSolver::command_buffer_for(int substeps) {
   VkCommandBuffer cb = VK_NULL_HANDLE;
   check(vkAllocateCommandBuffers(context_->device(), &alloc, &cb), "vkAllocateCommandBuffers");
   record_steps(cb, substeps);
-  recorded_[substeps] = cb;
+  recorded_[key] = cb;
   return cb;
 }
 
@@ -496,6 +643,7 @@ void VulkanSolver::read_results(int substeps) {
   clamped_ += reduce[0];  // cumulative, as CpuSolver::clamped_particle_count
   std::memcpy(&max_speed2_, &reduce[1], sizeof(float));
   std::memcpy(&max_accel2_, &reduce[2], sizeof(float));
+  read_solver_counters();
   if (queries_ && substeps > 0 && timed(substeps)) {
     const std::uint32_t n = queries_per_step_ * static_cast<std::uint32_t>(substeps) + 2;
     std::vector<std::uint64_t> ticks(n);
@@ -504,7 +652,15 @@ void VulkanSolver::read_results(int substeps) {
           "vkGetQueryPoolResults");
     const double s_per_tick = context_->timestamp_period_ns() * 1e-9;
     auto span = [&](std::uint32_t a, std::uint32_t b) { return static_cast<double>(ticks[b] - ticks[a]) * s_per_tick; };
-    for (int s = 0; s < substeps; ++s) {
+    for (int s = 0; s < substeps && dfsph_; ++s) {
+      const std::uint32_t q = static_cast<std::uint32_t>(s) * queries_per_step_;
+      pass_times_.sort_s += span(q, q + 1);
+      pass_times_.density_s += span(q + 1, q + 2);
+      pass_times_.pressure_s += span(q + 2, q + 3) + span(q + 4, q + 5);
+      pass_times_.forces_s += span(q + 3, q + 4);
+      pass_times_.integration_s += span(q + 5, q + 6);
+    }
+    for (int s = 0; s < substeps && !dfsph_; ++s) {
       const std::uint32_t q = static_cast<std::uint32_t>(s) * queries_per_step_;
       pass_times_.sort_s += span(q, q + 1);
       pass_times_.density_s += span(q + 1, q + 2);
@@ -521,6 +677,7 @@ PhaseTimes VulkanSolver::phase_times() const {
   t.neighbour_search_s = pass_times_.sort_s;
   t.density_s = pass_times_.density_s;
   t.forces_s = pass_times_.forces_s;
+  t.pressure_s = pass_times_.pressure_s;
   t.bodies_s = pass_times_.bodies_s;
   t.integration_s = pass_times_.integration_s + pass_times_.reductions_s;
   return t;

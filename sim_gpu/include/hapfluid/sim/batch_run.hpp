@@ -3,8 +3,14 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <ostream>
 #include <string>
+
+#include "hapfluid/config/json_output.hpp"
+#include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/solver.hpp"
 
 namespace hapfluid::sim {
 
@@ -31,5 +37,13 @@ struct BatchResult {
 // a failure from there on leaves stats.json with "complete": false and the error, and the CSV
 // files as .part.
 BatchResult run_batch(const BatchOptions& options, std::ostream& progress);
+
+// The same run on the solver `make_solver` builds from the scene's model (any backend);
+// `extra_stats`, when given, adds the backend's own keys to stats.json. The substeps of a frame
+// go to Solver::advance whole when no hand is coupled (one submission on a GPU).
+using SolverFactory = std::function<std::unique_ptr<Solver>(SimulationModel)>;
+using ExtraStats = std::function<void(const Solver&, config::Json&)>;
+BatchResult run_batch_with(const BatchOptions& options, std::ostream& progress, const SolverFactory& make_solver,
+                           const ExtraStats& extra_stats = {});
 
 }  // namespace hapfluid::sim

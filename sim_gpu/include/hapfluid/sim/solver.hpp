@@ -34,6 +34,9 @@ struct SolverIterations {
   std::uint64_t viscosity_iterations = 0;  // conjugate-gradient iterations of the implicit viscosity
   std::uint64_t explicit_viscosity_steps = 0;  // steps whose viscosity was one explicit step (as exact)
   std::uint64_t unconverged_solves = 0;   // solves that stopped at max_solver_iterations
+  // Vulkan: of those, solves that stopped at the iterations recorded for them, below
+  // max_solver_iterations (iteration_budget.hpp)
+  std::uint64_t budget_overruns = 0;
   double last_density_error = 0;          // mean (rho* - rho0) / rho0 of the last constant-density solve
   double max_density_error = 0;           // largest such mean over the run
 };
@@ -67,8 +70,9 @@ class Solver {
   virtual void step(double dt) = 0;
   // Advances by `duration_s` in equal substeps no longer than stable_time_step(); returns the
   // number of substeps. before_substep(t), when given, runs before each substep with the
-  // substep's start time (the caller sets device states there); otherwise they are held.
-  int advance(double duration_s, const std::function<void(double)>& before_substep = {});
+  // substep's start time (the caller sets device states there); otherwise they are held. A
+  // backend may run the substeps of a frame without returning to the host in between.
+  virtual int advance(double duration_s, const std::function<void(double)>& before_substep = {});
 
   // Brings the fluid particles of model() up to date (a read-back on Vulkan) and throws
   // std::runtime_error naming the first non-finite particle or body (check_finite_state).

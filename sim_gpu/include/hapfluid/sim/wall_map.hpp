@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "hapfluid/sim/cubic_kernel.hpp"
+#include "hapfluid/sim/model.hpp"
 
 namespace hapfluid::sim {
 
@@ -57,5 +58,14 @@ struct WallMap {
 // The map of the enabled walls of a box, for the cubic kernel and fluid lattice spacing given.
 WallMap make_wall_map(const float box_lo[3], const float box_hi[3], const bool low_wall[3], const bool high_wall[3],
                       const CubicKernel& kernel, double spacing_m);
+
+// The walls of the scene's domain box (those its clamp encloses), for the incompressible kernel.
+WallMap domain_wall_map(const SimulationParams& p);
+
+// The static solids the incompressible solver's fluid meets as particles: the static bodies'
+// particles, sorted by cell on the model's grid. The domain walls are left out: the fluid sees
+// them through their volume map (their particles stay in the model for body contacts and
+// outputs).
+SortedSolids static_solids_beside_walls(const SimulationModel& model);
 
 }  // namespace hapfluid::sim

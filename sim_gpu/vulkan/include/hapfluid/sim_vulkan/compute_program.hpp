@@ -24,7 +24,11 @@ const std::vector<ShaderModuleCode>& builtin_shaders();
 enum class Pass : int {
   hash_fluid, hash_bodies, scan_local, scan_blocks, scan_add, scatter, order_cells, gather_fluid,
   gather_bodies, density_cells, body_contact_pressure, fluid_forces_cells, body_forces, body_sums, body_sums_final,
-  body_update, integrate_fluid, adopt_sorted, max_speed, max_speed_final, count
+  body_update, integrate_fluid, adopt_sorted, max_speed, max_speed_final,
+  // The incompressible solver (dfsph_*.comp).
+  dfsph_gather, dfsph_density, dfsph_rate, dfsph_check, dfsph_apply, dfsph_solve_end, dfsph_forces, dfsph_predict,
+  dfsph_visc_rhs, dfsph_visc_check, dfsph_cg_apply, dfsph_cg_alpha, dfsph_cg_update, dfsph_cg_check,
+  dfsph_cg_direction, dfsph_visc_end, dfsph_integrate, dfsph_adopt, count
 };
 const char* pass_shader_name(Pass pass);
 
@@ -47,6 +51,10 @@ class ComputeProgram {
 
   // Records: bind pipeline and set, push constants, dispatch ceil(threads / local size) groups.
   void dispatch(VkCommandBuffer cb, Pass pass, std::uint32_t groups, const PushConstants& push = {}) const;
+  // The same with the group counts read by the device from `args` at `offset` (three uints)
+  // when the dispatch runs: a count an earlier pass of the submission wrote, zero to skip.
+  void dispatch_indirect(VkCommandBuffer cb, Pass pass, const Buffer& args, VkDeviceSize offset,
+                         const PushConstants& push = {}) const;
 
  private:
   Context& context_;

@@ -9,6 +9,11 @@
 // count, then re-submitted); only the CFL inputs (two maxima) come back per frame, and the
 // particles only when sync_particles() is called (frame export, publishing).
 //
+// fluid.solver = "dfsph" runs the incompressible solver of dfsph_solver.hpp pass by pass
+// (dfsph_recording.cpp): the walls as their volume map, static bodies as particles, both pressure
+// solves and the viscosity solve iterating on the device to their tolerances within the one
+// submission. Dynamic bodies are not on the device yet with this method.
+//
 // With dynamic bodies each step is two submissions: the device computes the body particles'
 // forces and reduces them per body (eqs. 10-12, two-pass tree reduction of §4.3); the host reads
 // back those few numbers, integrates each body with the couplings (Algorithm 2, lines 6-9:
@@ -16,9 +21,11 @@
 // device then moves the rigid particles (eq. 14) and integrates the fluid. Per step only the
 // per-body sums come back, which is also what the 1 kHz loop needs.
 //
-// The API mirrors CpuSolver so that a batch runner or the live loop can drive either.
+// It is a sim::Solver: batch runs, the live sim, benches and tests drive it as they drive the
+// CPU solvers.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -28,7 +35,9 @@
 
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/model.hpp"
+#include "hapfluid/sim/solver.hpp"
 #include "hapfluid/sim_vulkan/compute_program.hpp"
+#include "hapfluid/sim_vulkan/iteration_budget.hpp"
 #include "hapfluid/sim_vulkan/base.hpp"
 
 namespace hapfluid::sim::vulkan {
@@ -43,44 +52,49 @@ struct PassTimes {
   double sort_s = 0;        // hash, prefix scan, scatter, in-cell order, gather
   double density_s = 0;
   double forces_s = 0;
+  double pressure_s = 0;    // dfsph: divergence-free and constant-density solves
   double integration_s = 0;
   double bodies_s = 0;      // body contact pressure, body forces, per-body reductions, eq. 14
   double reductions_s = 0;  // CFL maxima
   std::uint64_t steps = 0;
 };
 
-class VulkanSolver {
+class VulkanSolver final : public Solver {
  public:
   // Throws VulkanUnavailable when no usable Vulkan device exists, std::runtime_error when the
   // model uses something this backend does not run.
   VulkanSolver(SimulationModel model, const VulkanSolverOptions& options);
-  ~VulkanSolver();
+  ~VulkanSolver() override;
   VulkanSolver(const VulkanSolver&) = delete;
   VulkanSolver& operator=(const VulkanSolver&) = delete;
 
   // The model; its particle arrays are those of the last sync_particles() call.
-  const SimulationModel& model() const { return m_; }
-  const SimulationParams& params() const { return m_.params; }
-  double time_s() const { return time_s_; }
-  std::uint64_t steps() const { return steps_; }
+  const SimulationModel& model() const override { return m_; }
+  double time_s() const override { return time_s_; }
+  std::uint64_t steps() const override { return steps_; }
   // Fluid particles the domain-box clamp put back, summed over all steps (as CpuSolver).
-  std::uint64_t clamped_particle_count() const { return clamped_; }
-  const DeviceDescription& device() const { return context_->description(); }
+  std::uint64_t clamped_particle_count() const override { return clamped_; }
+  const DeviceDescription& device_description() const { return context_->description(); }
+  ComputeDevice device() const override {
+    const DeviceDescription& d = device_description();
+    return {d.name, d.type, d.driver};
+  }
+  const char* backend() const override { return "vulkan"; }
+  int threads() const override { return 0; }
   const Context& context() const { return *context_; }
 
-  void set_device_state(std::size_t device, const DeviceState& state);
+  void set_device_state(std::size_t device, const DeviceState& state) override;
 
   // Same bound as CpuSolver::stable_time_step, from maxima computed on the device.
-  double stable_time_step() const;
-  void step(double dt) { step_many(dt, 1); }
+  double stable_time_step() const override;
+  void step(double dt) override { step_many(dt, 1); }
   // `substeps` steps of dt in one submission.
   void step_many(double dt, int substeps);
   // Advances by `duration_s` in equal substeps no longer than stable_time_step() (as
-  // CpuSolver::advance); returns the number of substeps. before_substep(t), when given, runs
-  // before each substep with its start time (the caller sets device poses there) and the
-  // substeps are submitted one by one; without it the frame is one submission where the scene
-  // allows (no dynamic bodies) and device states are held.
-  int advance(double duration_s, const std::function<void(double)>& before_substep = {});
+  // Solver::advance); returns the number of substeps. With before_substep the substeps are
+  // submitted one by one; without it the frame is one submission where the scene allows (no
+  // dynamic bodies) and device states are held.
+  int advance(double duration_s, const std::function<void(double)>& before_substep = {}) override;
 
   // Downloads fluid particles (position, velocity, acceleration, density, pressure, volume,
   // viscosity, id) into model(), in the device's current (cell-sorted) order.
@@ -88,11 +102,14 @@ class VulkanSolver {
   // Throws std::runtime_error naming the first non-finite particle or body (syncs first;
   // check_finite_state).
   void check_finite();
+  void sync_and_check_finite() override { check_finite(); }
 
   // Per-pass GPU times and the same split as the CPU backend's PhaseTimes (sort is the
   // neighbour search; reductions count as integration).
   const PassTimes& pass_times() const { return pass_times_; }
-  PhaseTimes phase_times() const;
+  PhaseTimes phase_times() const override;
+  // dfsph: the iterations of the solves, read back with each submission's results.
+  SolverIterations iterations() const override { return iterations_; }
 
  private:
   void check_device_limits() const;
@@ -108,6 +125,16 @@ class VulkanSolver {
   void write_body_states();
   VkCommandBuffer allocate_command_buffer();
   void record_maxima(VkCommandBuffer cb);
+  // The incompressible solver (dfsph_recording.cpp).
+  void record_dfsph_initial(VkCommandBuffer cb);
+  void record_dfsph_step(VkCommandBuffer cb, const std::function<void()>& stamp);
+  void record_pressure_solve(VkCommandBuffer cb, bool density, int budget);
+  void record_viscosity_solve(VkCommandBuffer cb, int budget);
+  const Buffer& dfsph_solve_buffer() const;
+  // fluid.settle_s, as DfsphSolver::settle: steps at max_dt_s keeping part of the velocity, then
+  // the clock, counters and timings start from zero.
+  void settle(double duration_s);
+  void read_solver_counters();
   // Records the head (may be null) and the tail of a body step; the tail computes the CFL
   // maxima when `with_maxima` (the last substep of a frame).
   void record_body_step(VkCommandBuffer head, VkCommandBuffer tail, bool with_maxima);
@@ -135,8 +162,21 @@ class VulkanSolver {
   VkQueryPool queries_ = VK_NULL_HANDLE;
   std::uint32_t queries_per_step_ = 0, query_capacity_ = 0;
   VkFence fence_ = VK_NULL_HANDLE;
-  std::map<int, VkCommandBuffer> recorded_;  // substep count -> command buffer
+  // (substep count, dfsph: the recorded iterations of the divergence, density and viscosity
+  // solves) -> command buffer
+  using RecordingKey = std::array<int, 4>;
+  RecordingKey recording_key(int substeps) const;
+  std::map<RecordingKey, VkCommandBuffer> recorded_;
 
+  // The static solids the fluid's passes read: all of them (wcsph), or those beside the walls'
+  // volume map (dfsph).
+  const SortedSolids& fluid_statics() const { return dfsph_ ? fluid_statics_ : m_.static_solids; }
+  SortedSolids fluid_statics_;
+  bool dfsph_ = false;     // the model's method is the incompressible solver
+  bool viscous_ = false;   // dfsph: some viscosity acts (the viscosity solve is recorded)
+  float velocity_kept_ = 1;  // dfsph: 1, or the settling's share of the velocity kept per step
+  SolverIterations iterations_;
+  IterationBudget divergence_budget_{0}, density_budget_{0}, viscosity_budget_{0};
   float max_speed2_ = 0, max_accel2_ = 0;
   double time_s_ = 0;
   std::uint64_t steps_ = 0, clamped_ = 0;
