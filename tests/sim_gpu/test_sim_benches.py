@@ -36,5 +36,18 @@ def test_bench_sim_cpu_steps_each_pool_with_its_named_method(build_dir, tmp_path
 @pytest.mark.slow
 def test_bench_sim_vulkan_runs_its_pools_and_figures(build_dir, tmp_path):
     records = run_bench(build_dir, "bench_sim_vulkan", tmp_path / "vulkan.json")
-    assert {r["params"]["sweep"] for r in records} == {"pool", "fig6b", "fig6c"}
+    assert {r["params"]["sweep"] for r in records} == {"pool", "pool_dfsph", "fig6b", "fig6c"}
     assert all(r["params"]["backend"] == "vulkan" and r["metrics"]["steps_per_s"] > 0 for r in records)
+    # Each pool ran the method its sweep names, and says what a step asked of the device and the
+    # host: a frame of fluid steps is one submission and one wait (a step with bodies two, around
+    # the host's body integration); the incompressible solver's iterations are indirect
+    # dispatches, and it iterated.
+    for r in records:
+        m = r["metrics"]
+        assert r["params"]["solver"] == ("dfsph" if r["params"]["sweep"] == "pool_dfsph" else "wcsph"), r
+        assert m["dispatches_per_step"] > 0 and m["barriers_per_step"] > 0, r
+        round_trips = 2 if r["params"]["body_particles"] > 0 else 1
+        assert m["host_waits_per_step"] == m["submissions_per_step"] <= round_trips, r
+        assert (m["indirect_dispatches_per_step"] > 0) == (r["params"]["solver"] == "dfsph"), r
+        if r["params"]["solver"] == "dfsph":
+            assert m["density_iterations_per_step"] >= 2 and "vulkan_over_cpu" in m, r

@@ -3,6 +3,7 @@
 // from timestamp queries:
 //  - pool (§6.2.1, fig. 6a): a 1 x 1 m pool 0.25 m deep at ~8k, 16k, 32k, 64k particles; each
 //    also timed on the CPU backend (2 threads) in this process for the Vulkan/CPU ratio;
+//  - pool_dfsph: the same pool at 8k and 32k on the incompressible solver, against the CPU's;
 //  - fig6b: 25k particles, one floating sphere of 1k..20k particles;
 //  - fig6c: 25k particles with 1..16 spheres sharing 8k body particles.
 // Usage: bench_sim_vulkan --out FILE.json [--quick] [--validation]. Progress on stderr.
@@ -22,6 +23,8 @@
 #include "hapfluid/sim/cpu_solver.hpp"
 #include "hapfluid/sim/mesh_sampling.hpp"
 #include "hapfluid/config/primitive_meshes.hpp"
+#include "hapfluid/sim/solver.hpp"
+#include "hapfluid/sim_vulkan/iteration_budget.hpp"
 #include "hapfluid/sim_vulkan/vulkan_solver.hpp"
 #include "../../bench/bench_scenes.hpp"
 
@@ -33,12 +36,12 @@ namespace {
 
 std::vector<config::Json> records;
 
-double cpu_ms_per_step(const SimulationModel& model, int steps) {
-  CpuSolver solver(model, 2);
-  const double dt = solver.stable_time_step();
-  for (int i = 0; i < 3; ++i) solver.step(dt);
+// The CPU solver of the scene's method, 2 threads, the same steps of `dt` as the device took.
+double cpu_ms_per_step(const SimulationModel& model, double dt, int warm_up, int steps) {
+  const auto solver = make_cpu_solver(model, 2);
+  for (int i = 0; i < warm_up; ++i) solver->step(dt);
   const auto t0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < steps; ++i) solver.step(dt);
+  for (int i = 0; i < steps; ++i) solver->step(dt);
   return 1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / steps;
 }
 
@@ -49,20 +52,34 @@ void measure(const std::string& sweep, const config::Scene& scene, int steps, bo
   options.context.validation = validation;
   vulkan::VulkanSolver solver(model, options);
   const double dt = solver.stable_time_step();
-  solver.step_many(dt, 3);  // warm-up: first touches of every buffer
+  // Warm-up: first touches of every buffer; for the incompressible solver, the submissions its
+  // iteration budgets learn from (iteration_budget.hpp), one step each, as a live run makes them.
+  const bool dfsph = model.params.solver == config::PressureSolver::dfsph;
+  const int warm_up = dfsph ? vulkan::IterationBudget::kWindow : 3;
+  if (dfsph) {
+    for (int i = 0; i < warm_up; ++i) solver.step(dt);
+  } else {
+    solver.step_many(dt, warm_up);
+  }
   const vulkan::PassTimes before = solver.pass_times();
+  const vulkan::StepWork work_before = solver.work();
+  const SolverIterations its_before = solver.iterations();
   const auto t0 = std::chrono::steady_clock::now();
   // The steps of a published frame go in one submission (fluid-only scenes; with bodies every
   // step is two submissions around the host's body integration).
   solver.step_many(dt, steps);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const vulkan::PassTimes& after = solver.pass_times();
+  const vulkan::StepWork& work = solver.work();
+  const SolverIterations& its = solver.iterations();
+  auto per_step = [&](std::uint64_t a, std::uint64_t b) { return static_cast<double>(a - b) / steps; };
   const auto& m = solver.model();
   const std::size_t fluid = m.fluid.size(), body = m.body_particles.size();
   const double ms = 1000 * wall / steps;
   auto pass = [&](double a, double b) { return 1000 * (a - b) / steps; };
-  const double cpu_ms = with_cpu ? cpu_ms_per_step(model, steps) : 0;
-  config::Json params = {{"backend", "vulkan"}, {"sweep", sweep}, {"particles", fluid + body}, {"fluid_particles", fluid},
+  const double cpu_ms = with_cpu ? cpu_ms_per_step(model, dt, warm_up, steps) : 0;
+  config::Json params = {{"backend", "vulkan"}, {"sweep", sweep}, {"solver", solver.method()},
+                         {"particles", fluid + body}, {"fluid_particles", fluid},
                          {"body_particles", body}, {"boundary_particles", m.wall_particle_count},
                          {"device", solver.device().name}};
   params.update(extra_params);
@@ -71,7 +88,21 @@ void measure(const std::string& sweep, const config::Scene& scene, int steps, bo
                           {"sort_ms", pass(after.sort_s, before.sort_s)}, {"density_ms", pass(after.density_s, before.density_s)},
                           {"forces_ms", pass(after.forces_s, before.forces_s)}, {"bodies_ms", pass(after.bodies_s, before.bodies_s)},
                           {"integration_ms", pass(after.integration_s, before.integration_s)},
-                          {"reductions_ms", pass(after.reductions_s, before.reductions_s)}};
+                          {"pressure_solve_ms", pass(after.pressure_s, before.pressure_s)},
+                          {"reductions_ms", pass(after.reductions_s, before.reductions_s)},
+                          // What a step asks of the device and the host (the steps of a frame in
+                          // one submission): recorded dispatches (indirect ones may run empty),
+                          // barriers, submissions and fence waits.
+                          {"dispatches_per_step", per_step(work.dispatches, work_before.dispatches)},
+                          {"indirect_dispatches_per_step", per_step(work.indirect_dispatches, work_before.indirect_dispatches)},
+                          {"barriers_per_step", per_step(work.barriers, work_before.barriers)},
+                          {"submissions_per_step", per_step(work.submissions, work_before.submissions)},
+                          {"host_waits_per_step", per_step(work.host_waits, work_before.host_waits)}};
+  if (dfsph) {
+    metrics["density_iterations_per_step"] = per_step(its.density_iterations, its_before.density_iterations);
+    metrics["divergence_iterations_per_step"] = per_step(its.divergence_iterations, its_before.divergence_iterations);
+    metrics["budget_overruns"] = its.budget_overruns - its_before.budget_overruns;
+  }
   if (with_cpu) {
     metrics["cpu_2_threads_ms_per_step"] = cpu_ms;
     metrics["vulkan_over_cpu"] = ms / cpu_ms;
@@ -105,6 +136,9 @@ int main(int argc, char** argv) {
   try {
     const std::vector<int> sizes = quick ? std::vector<int>{8000, 32000} : std::vector<int>{8000, 16000, 32000, 64000};
     for (int n : sizes) measure("pool", pool_scene(dir, n, n, {}), steps, validation, true);
+    // The incompressible solver at water's viscosity (the default method), against the CPU's.
+    const std::vector<int> dfsph_sizes = quick ? std::vector<int>{8000} : std::vector<int>{8000, 32000};
+    for (int n : dfsph_sizes) measure("pool_dfsph", pool_scene(dir, n, n, {}, true), steps, validation, true);
     const int total = 25000;
     const std::vector<int> sphere_sizes = quick ? std::vector<int>{5000} : std::vector<int>{1000, 2500, 5000, 10000, 20000};
     for (int n : sphere_sizes) {

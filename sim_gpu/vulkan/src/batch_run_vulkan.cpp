@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <memory>
 
 #include "hapfluid/config/log.hpp"
@@ -23,6 +24,13 @@ void vulkan_stats(const VulkanSolver& solver, config::Json& j) {
                                {"bodies", per_step_ms(g.bodies_s, timed)},
                                {"integration", per_step_ms(g.integration_s, timed)},
                                {"reductions", per_step_ms(g.reductions_s, timed)}};
+  const StepWork& w = solver.work();
+  const double steps = static_cast<double>(std::max<std::uint64_t>(solver.steps(), 1));
+  j["gpu_work_per_step"] = {{"dispatches", w.dispatches / steps},
+                            {"indirect_dispatches", w.indirect_dispatches / steps},
+                            {"barriers", w.barriers / steps},
+                            {"submissions", w.submissions / steps},
+                            {"host_waits", w.host_waits / steps}};
   j["vulkan_validation"] = {{"enabled", solver.context().validation_enabled()},
                             {"warnings", counts.warnings},
                             {"errors", counts.errors}};

@@ -148,6 +148,7 @@ void ComputeProgram::dispatch(VkCommandBuffer cb, Pass pass, std::uint32_t group
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
   vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(PushConstants), &push);
   vkCmdDispatch(cb, groups, 1, 1);
+  ++recorded_.dispatches;
 }
 
 void ComputeProgram::dispatch_indirect(VkCommandBuffer cb, Pass pass, const Buffer& args, VkDeviceSize offset,
@@ -156,6 +157,34 @@ void ComputeProgram::dispatch_indirect(VkCommandBuffer cb, Pass pass, const Buff
   vkCmdBindDescriptorSets(cb, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
   vkCmdPushConstants(cb, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(PushConstants), &push);
   vkCmdDispatchIndirect(cb, args.handle(), offset);
+  ++recorded_.indirect_dispatches;
+}
+
+void ComputeProgram::barrier(VkCommandBuffer cb, Barrier kind) const {
+  VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  VkPipelineStageFlags src = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, dst = VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+  b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_SHADER_READ_BIT;
+  b.dstAccessMask = VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT;
+  switch (kind) {
+    case Barrier::compute:
+      break;
+    case Barrier::compute_and_indirect:
+      b.dstAccessMask |= VK_ACCESS_INDIRECT_COMMAND_READ_BIT;
+      dst |= VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT;
+      break;
+    case Barrier::host_to_compute:
+      b.srcAccessMask = VK_ACCESS_HOST_WRITE_BIT;
+      b.dstAccessMask |= VK_ACCESS_UNIFORM_READ_BIT;
+      src = VK_PIPELINE_STAGE_HOST_BIT;
+      break;
+    case Barrier::compute_to_host:
+      b.srcAccessMask = VK_ACCESS_SHADER_WRITE_BIT;
+      b.dstAccessMask = VK_ACCESS_HOST_READ_BIT | VK_ACCESS_TRANSFER_READ_BIT;
+      dst = VK_PIPELINE_STAGE_HOST_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT;
+      break;
+  }
+  vkCmdPipelineBarrier(cb, src, dst, 0, 1, &b, 0, nullptr, 0, nullptr);
+  ++recorded_.barriers;
 }
 
 }  // namespace hapfluid::sim::vulkan

@@ -175,6 +175,7 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
   record_steps(cb, 0);
   submit_and_wait(cb);
   read_results(0);
+  work_ = {};
 }
 
 void VulkanSolver::settle(double duration_s) {
@@ -188,6 +189,7 @@ void VulkanSolver::settle(double duration_s) {
   clamped_ = 0;
   pass_times_ = {};
   iterations_ = {};
+  work_ = {};
 }
 
 const Buffer& VulkanSolver::dfsph_solve_buffer() const { return b_->d_solve; }
@@ -219,6 +221,16 @@ void VulkanSolver::read_solver_counters() {
                              " fluid neighbours, more than the " + std::to_string(list_capacity(m_.params)) +
                              " its list holds (1.5 times the bulk at rest): the fluid is compressed far beyond rest "
                              "density at t = " + std::to_string(time_s_) + " s");
+}
+
+void VulkanSolver::note_recorded(VkCommandBuffer cb, const std::function<void()>& record) {
+  const RecordedWork before = program_->recorded();
+  record();
+  const RecordedWork& after = program_->recorded();
+  RecordedWork& w = work_of_[cb];
+  w.dispatches += after.dispatches - before.dispatches;
+  w.indirect_dispatches += after.indirect_dispatches - before.indirect_dispatches;
+  w.barriers += after.barriers - before.barriers;
 }
 
 VulkanSolver::~VulkanSolver() {
@@ -614,7 +626,10 @@ VkCommandBuffer VulkanSolver::command_buffer_for(int substeps) {
   // recorded, but bound the cache.
   if (recorded_.size() > 16) {
     for (auto& [n, cb] : recorded_)
-      if (n[0] != 0) vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
+      if (n[0] != 0) {
+        work_of_.erase(cb);
+        vkFreeCommandBuffers(context_->device(), context_->command_pool(), 1, &cb);
+      }
     std::erase_if(recorded_, [](const auto& e) { return e.first[0] != 0; });
   }
   VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
@@ -623,7 +638,7 @@ VkCommandBuffer VulkanSolver::command_buffer_for(int substeps) {
   alloc.commandBufferCount = 1;
   VkCommandBuffer cb = VK_NULL_HANDLE;
   check(vkAllocateCommandBuffers(context_->device(), &alloc, &cb), "vkAllocateCommandBuffers");
-  record_steps(cb, substeps);
+  note_recorded(cb, [&] { record_steps(cb, substeps); });
   recorded_[key] = cb;
   return cb;
 }
@@ -633,6 +648,14 @@ void VulkanSolver::submit_and_wait(VkCommandBuffer cb) {
   submit.commandBufferCount = 1;
   submit.pCommandBuffers = &cb;
   check(vkQueueSubmit(context_->queue(), 1, &submit, fence_), "vkQueueSubmit");
+  const auto recorded = work_of_.find(cb);
+  if (recorded != work_of_.end()) {
+    work_.dispatches += recorded->second.dispatches;
+    work_.indirect_dispatches += recorded->second.indirect_dispatches;
+    work_.barriers += recorded->second.barriers;
+  }
+  ++work_.submissions;
+  ++work_.host_waits;
   const VkResult r = vkWaitForFences(context_->device(), 1, &fence_, VK_TRUE, UINT64_MAX);
   vkResetFences(context_->device(), 1, &fence_);
   check(r, "vkWaitForFences");

@@ -36,6 +36,19 @@ struct PushConstants {
   std::uint32_t a = 0, b = 0, c = 0, d = 0;
 };
 
+// The memory barriers between recorded passes.
+enum class Barrier {
+  compute,               // a pass's writes before the next pass's reads and writes
+  compute_and_indirect,  // the same, and before the group counts of the indirect dispatches that follow
+  host_to_compute,       // host writes (parameters, counters) before the first pass
+  compute_to_host,       // the last pass's writes, for the host after the fence
+};
+
+// Commands recorded so far by one program (summed over every command buffer it recorded into).
+struct RecordedWork {
+  std::uint64_t dispatches = 0, indirect_dispatches = 0, barriers = 0;
+};
+
 class ComputeProgram {
  public:
   explicit ComputeProgram(Context& context);
@@ -55,6 +68,8 @@ class ComputeProgram {
   // when the dispatch runs: a count an earlier pass of the submission wrote, zero to skip.
   void dispatch_indirect(VkCommandBuffer cb, Pass pass, const Buffer& args, VkDeviceSize offset,
                          const PushConstants& push = {}) const;
+  void barrier(VkCommandBuffer cb, Barrier kind) const;
+  const RecordedWork& recorded() const { return recorded_; }
 
  private:
   Context& context_;
@@ -66,6 +81,7 @@ class ComputeProgram {
   std::vector<VkDescriptorBufferInfo> buffer_infos_;
   std::vector<VkBufferView> texel_views_;
   std::vector<bool> written_;
+  mutable RecordedWork recorded_;
 };
 
 }  // namespace hapfluid::sim::vulkan

@@ -59,6 +59,13 @@ struct PassTimes {
   std::uint64_t steps = 0;
 };
 
+// Commands and host round trips of the steps taken (benchmarks, stats.json): the dispatches and
+// barriers recorded in the command buffers submitted (an indirect dispatch may run with no
+// workgroups), the submissions and the host's fence waits.
+struct StepWork {
+  std::uint64_t dispatches = 0, indirect_dispatches = 0, barriers = 0, submissions = 0, host_waits = 0;
+};
+
 class VulkanSolver final : public Solver {
  public:
   // Throws VulkanUnavailable when no usable Vulkan device exists, std::runtime_error when the
@@ -107,6 +114,8 @@ class VulkanSolver final : public Solver {
   // Per-pass GPU times and the same split as the CPU backend's PhaseTimes (sort is the
   // neighbour search; reductions count as integration).
   const PassTimes& pass_times() const { return pass_times_; }
+  // Since the first step (after settling).
+  const StepWork& work() const { return work_; }
   PhaseTimes phase_times() const override;
   // dfsph: the iterations of the solves, read back with each submission's results.
   SolverIterations iterations() const override { return iterations_; }
@@ -167,6 +176,10 @@ class VulkanSolver final : public Solver {
   using RecordingKey = std::array<int, 4>;
   RecordingKey recording_key(int substeps) const;
   std::map<RecordingKey, VkCommandBuffer> recorded_;
+  std::map<VkCommandBuffer, RecordedWork> work_of_;  // what each recorded command buffer holds
+  // The commands recorded by `record` into their command buffer `cb`.
+  void note_recorded(VkCommandBuffer cb, const std::function<void()>& record);
+  StepWork work_;
 
   // The static solids the fluid's passes read: all of them (wcsph), or those beside the walls'
   // volume map (dfsph).
