@@ -23,11 +23,6 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // keeps a solve that overshot last step from ringing).
 constexpr float kWarmStartFraction = 0.5f;
 
-// Settling is a dynamic relaxation: the fluid keeps this fraction of its velocity after each
-// step. Zeroing it instead (a quasi-static relaxation) leaves the column pressed down by one
-// step of gravity and it springs back when released, by 1.8 mm in a 20 cm tank.
-constexpr float kSettleVelocityKept = 0.8f;
-
 // The viscosity solve ends once the residual is this fraction of the right-hand side's norm (the
 // velocities: 0.1 % of a 1 m/s flow is 1 mm/s).
 constexpr double kViscosityTolerance = 1e-3;
@@ -112,11 +107,16 @@ double DfsphSolver::stable_time_step() const {
   for (std::size_t i = 0; i < f.size(); ++i) v2 = std::max(v2, f.vx[i] * f.vx[i] + f.vy[i] * f.vy[i] + f.vz[i] * f.vz[i]);
   const BodyParticles& bp = m_.body_particles;
   for (std::size_t i = 0; i < bp.size(); ++i) v2 = std::max(v2, bp.vx[i] * bp.vx[i] + bp.vy[i] * bp.vy[i] + bp.vz[i] * bp.vz[i]);
+  return incompressible_time_step(p, v2, bodies_touching_);
+}
+
+double incompressible_time_step(const SimulationParams& p, float max_speed2, bool bodies_touching) {
+  if (p.fixed_dt_s > 0) return p.fixed_dt_s;
   double dt = p.max_dt_s;
-  if (v2 > 0) dt = std::min(dt, p.cfl * p.particle_spacing_m / std::sqrt(static_cast<double>(v2)));
+  if (max_speed2 > 0) dt = std::min(dt, p.cfl * p.particle_spacing_m / std::sqrt(static_cast<double>(max_speed2)));
   // Contacts are springs of the contact stiffness (body_contacts.hpp): while a body touches
   // another solid the step resolves them like a speed of sound.
-  if (bodies_touching_) dt = std::min(dt, 0.4 * p.kernel.h / p.speed_of_sound_m_s);
+  if (bodies_touching) dt = std::min(dt, 0.4 * p.kernel.h / p.speed_of_sound_m_s);
   return dt;
 }
 

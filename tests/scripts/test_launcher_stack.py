@@ -6,8 +6,8 @@ import sys
 
 from hapfluid.launcher import Stack
 
-# A service that only sleeps, and says when it has started; SIGINT's default ends it.
-SLEEPER = "import sys, time; print('up', flush=True); time.sleep(120)"
+# A service that says when it has started and waits for a signal; SIGINT's default ends it.
+SLEEPER = "import signal; print('up', flush=True); signal.pause()"
 
 
 def test_a_service_is_stopped_even_when_the_launcher_inherited_sigint_ignored(tmp_path):

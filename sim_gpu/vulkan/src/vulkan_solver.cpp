@@ -7,9 +7,12 @@
 #include <string>
 
 #include "../shaders/bindings.glsl"
+#include "hapfluid/sim/dfsph_solver.hpp"
 #include "hapfluid/sim/finite_state.hpp"
 #include "hapfluid/sim/gradient_correction.hpp"
+#include "hapfluid/sim/kernels.hpp"
 #include "hapfluid/sim/wall_map.hpp"
+#include "recording.hpp"
 
 namespace hapfluid::sim::vulkan {
 namespace {
@@ -44,7 +47,7 @@ constexpr std::uint32_t kSolveDensityIts = 7, kSolveDivergenceIts = 8, kSolveVis
 // failed long before; a list that would overflow stops the run with an error.
 std::uint32_t list_capacity(const SimulationParams& p) {
   const double ratio = p.incompressible.kernel.h / p.particle_spacing_m;
-  const std::uint32_t bulk = static_cast<std::uint32_t>(std::ceil(4.0 / 3.0 * 3.14159265358979 * ratio * ratio * ratio));
+  const std::uint32_t bulk = static_cast<std::uint32_t>(std::ceil(4.0 / 3.0 * kPi * ratio * ratio * ratio));
   return (bulk * 3 / 2 + 7) / 8 * 8;
 }
 
@@ -63,8 +66,6 @@ constexpr VkBufferUsageFlags kStorage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
 constexpr VkBufferUsageFlags kTexel = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
 constexpr VkFormat kVec4 = VK_FORMAT_R32G32B32A32_SFLOAT;
 constexpr VkFormat kUint = VK_FORMAT_R32_UINT;
-
-std::uint32_t groups(std::uint32_t threads, std::uint32_t local) { return (threads + local - 1) / local; }
 
 std::vector<float> pack4(std::size_t n, const float* a, const float* b, const float* c, const float* d,
                          float d_default = 0.0f) {
@@ -181,7 +182,7 @@ VulkanSolver::VulkanSolver(SimulationModel model, const VulkanSolverOptions& opt
 void VulkanSolver::settle(double duration_s) {
   const double dt = m_.params.fixed_dt_s > 0 ? m_.params.fixed_dt_s : m_.params.max_dt_s;
   const int steps = std::max(1, static_cast<int>(std::ceil(duration_s / dt - 1e-9)));
-  velocity_kept_ = 0.8f;  // DfsphSolver's settling damping
+  velocity_kept_ = kSettleVelocityKept;
   for (int k = 0; k < steps; ++k) step_many(dt, 1);
   velocity_kept_ = 1.0f;
   time_s_ = 0;
@@ -528,12 +529,7 @@ double VulkanSolver::stable_time_step() const {
   // CpuSolver::stable_time_step, term by term, with the maxima from the device.
   const SimulationParams& p = m_.params;
   if (p.fixed_dt_s > 0) return p.fixed_dt_s;
-  if (dfsph_) {
-    // DfsphSolver::stable_time_step without bodies: the velocity CFL and the scene's cap.
-    double dt = p.max_dt_s;
-    if (max_speed2_ > 0) dt = std::min(dt, p.cfl * p.particle_spacing_m / std::sqrt(static_cast<double>(max_speed2_)));
-    return dt;
-  }
+  if (dfsph_) return incompressible_time_step(p, max_speed2_, false);  // no bodies on the device with dfsph
   const double h = p.kernel.h;
   double dt = p.cfl * h / (p.speed_of_sound_m_s + std::sqrt(static_cast<double>(max_speed2_)));
   double mu_max = p.fluid_viscosity_pa_s;
