@@ -36,7 +36,7 @@ VOLUME_MAP_PADDING_SUPPORTS = 8
 VOLUME_MAP_CELL_SUPPORTS = 2
 DEFAULT_MAX_DT_S = 0.002  # hapfluid's time.max_dt_s default (config/include/hapfluid/config/scene.hpp)
 DEFAULT_SETTLE_S = 0.5    # its fluid.settle_s default (the same header)
-SETTLE_VELOCITY_KEPT = 0.8  # the velocity fraction its settling keeps after each step (sim_gpu/src/dfsph_solver.cpp)
+SETTLE_VELOCITY_KEPT = 0.8  # the velocity fraction its settling keeps after each step (sim_gpu/include/hapfluid/sim/dfsph_solver.hpp)
 
 # A unit cube centred on the origin, faces wound outward; scaled and moved onto the domain box.
 UNIT_BOX_OBJ = """# unit cube centred on the origin (hapfluid bench: SPlisHSPlasH wall box)

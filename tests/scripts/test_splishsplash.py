@@ -132,7 +132,7 @@ def test_settling_default_and_kept_fraction_are_hapfluids(splishsplash, source_d
     # Both codes must settle alike: the constants the comparison copies are the solver's own.
     header = (source_dir / "config/include/hapfluid/config/scene.hpp").read_text()
     assert f"double settle_s = {splishsplash.DEFAULT_SETTLE_S};" in header
-    solver = (source_dir / "sim_gpu/src/dfsph_solver.cpp").read_text()
+    solver = (source_dir / "sim_gpu/include/hapfluid/sim/dfsph_solver.hpp").read_text()
     assert f"constexpr float kSettleVelocityKept = {splishsplash.SETTLE_VELOCITY_KEPT}f;" in solver
 
 
