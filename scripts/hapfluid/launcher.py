@@ -13,7 +13,7 @@ A live run starts, in this order:
   haptic-render --live     headless PNG frames (or a window with --windowed)
 and cyclictest (rt-tests) at the loop's priority and period beside them (cyclictest_placement); runs for
 --duration seconds (default: the 3 s lead-in plus the scene's duration_s, 13 s for the default
-scene), stops them in reverse dependency order (render, loop, trace, sim, devices), checks every
+scene; with headless rendering, at least until the first frame is drawn), stops them in reverse dependency order (render, loop, trace, sim, devices), checks every
 exit code and leaves under out/<scene>-<timestamp>/:
   device_<name>.csv        what the fake device felt (its per-tick log)
   sim/couplings.csv        the coupling wrench the sim computed (on the hand), sim/bodies.csv, sim/stats.json
@@ -48,6 +48,8 @@ import tomli_w
 from . import latency_report  # cyclictest beside the loop, shared with latency_report --with-cyclictest
 
 from .paths import BIN, RIGS, ROOT, SCENES
+
+FIRST_FRAME_WAIT_S = 60.0  # how long a run waits past its time for the renderer's first frame
 SETTLE_S = 0.5  # the sim's time before the script starts below which its fluid has not settled
 
 
@@ -382,6 +384,7 @@ def run_live(args, scene_path, out, bin_dir):
                           nice=-5)  # feeds the haptic loop: ahead of builds and the renderer, on every CPU (as its unit)
         if not stack.wait_for_file(pathlib.Path(f"/dev/shm/{prefix}.sim_samples"), 30, sim):
             raise RuntimeError("haptic-sim did not publish /%s.sim_samples (see logs/haptic-sim.log)" % prefix)
+        awaited_frame = None
         if not args.no_render and not (bin_dir / "haptic-render").exists():
             print("hapfluid: haptic-render is not built: running without the renderer", file=sys.stderr)
         elif not args.no_render:
@@ -394,11 +397,22 @@ def run_live(args, scene_path, out, bin_dir):
             # sim leave: nice 19, as its unit (a waking sim thread preempts it at once, and it is
             # never starved: SCHED_IDLE beside a busy machine drew nothing and missed its SIGINT).
             stack.start("haptic-render", render, cpus=service_cpus, nice=19)
+            awaited_frame = None if args.windowed else out / "frames" / "frame_000000.png"
         deadline = started + duration
-        while time.monotonic() < deadline:
+        waiting_said = False
+        while time.monotonic() < deadline or (awaited_frame and not awaited_frame.exists()):
             dead = stack.early_exits()
             if dead:
                 raise RuntimeError("stopped early: " + ", ".join(f"{n} (exit {c})" for n, c in dead))
+            if time.monotonic() >= deadline:
+                # At nice 19 on a busy machine the renderer may not have drawn yet: a run that asked
+                # for frames ends with at least one, within a bound.
+                if not waiting_said:
+                    print("hapfluid: the run's time is up; waiting for the renderer's first frame", flush=True)
+                    waiting_said = True
+                if time.monotonic() >= deadline + FIRST_FRAME_WAIT_S:
+                    raise RuntimeError(f"haptic-render drew no frame within {FIRST_FRAME_WAIT_S:g} s after the "
+                                       "run's time was up (see logs/haptic-render.log)")
             time.sleep(0.1)
     except RuntimeError as e:
         ok = False

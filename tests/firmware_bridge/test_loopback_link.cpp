@@ -237,7 +237,9 @@ TEST_P(EveryFraming, TheEchoSaysHowManyOfOurCommandsTheDeviceHasNotBeenSeenToTak
     rig.arm->send(device::DeviceCommand{});
     rig.device_tick();
     rig.arm->poll(state);
-    if (tick > 2) ASSERT_LE(unheard(), 1u) << "tick " << tick;
+    if (tick > 2) {
+      ASSERT_LE(unheard(), 1u) << "tick " << tick;
+    }
   }
   for (int tick = 0; tick < 30; ++tick) {
     rig.arm->send(device::DeviceCommand{});
