@@ -329,6 +329,13 @@ TEST(VulkanEquivalence, DfsphDamBreakAgainstAFixedSphereEqualsCpuAfterFiveSteps)
   EXPECT_GT(r.gpu.max_speed_m_s, 0.1) << "the column must be falling";
 }
 
+TEST(VulkanEquivalence, DfsphXsphEqualsCpuAfterFiveSteps) {
+  // The same surge with a strong XSPH (0.3): its pass over the neighbour lists, recomputing each
+  // pair's kernel value from the positions, as the CPU's.
+  const DfsphRun r = run_both_dfsph("tests/sim_gpu_vulkan/scenes/dam_break_small_dfsph_xsph.toml", 5);
+  EXPECT_GT(r.gpu.max_speed_m_s, 0.1) << "the column must be falling";
+}
+
 TEST(VulkanEquivalence, DfsphViscousTankEqualsCpuAfterSettlingAndFiveSteps) {
   // 1 Pa s: each step's viscosity is a conjugate-gradient solve on the device, with the walls'
   // friction on its diagonal; the settling run before t = 0 damps the velocities on both.

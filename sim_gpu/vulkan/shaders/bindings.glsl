@@ -56,10 +56,10 @@
                               // per-workgroup partial sums (dfsph_common.glsl)
 #define BINDING_T_D_WALLS 43  // float texels: the domain walls' volume map (wall_map.hpp)
 #define BINDING_T_D_PARTICLE 44  // texel view of D_PARTICLE for neighbour reads
-#define BINDING_D_LIST_INDEX 45  // uint: each sorted particle's fluid neighbours, LIST_CAPACITY each
-#define BINDING_D_LIST_TERM 46   // vec4 per listed pair: V_j grad W_ij (1/m), V_j W_ij
-#define BINDING_T_D_LIST_INDEX 47
-#define BINDING_T_D_LIST_TERM 48
+#define BINDING_D_LIST 45    // vec4 per listed pair: V_j grad W_ij (1/m), j; list capacity per sorted particle
+#define BINDING_T_D_LIST 46
+#define BINDING_D_KAPPA 47   // float per sorted particle: this iteration's stiffness increment
+#define BINDING_T_D_KAPPA 48 // its texel view, for the neighbours' reads
 #define BINDING_COUNT 49
 
 #endif

@@ -10,6 +10,9 @@ void main() {
   if (k >= P.counts.x) return;
   float ki = D_STIFF(k).x;
   vec3 a = ki * D_SOLID(k).xyz;
-  FOR_EACH_LISTED(k) a += (ki + T_STIFF(LISTED_INDEX).x) * LISTED_TERM.xyz;
+  FOR_EACH_LISTED(k) {
+    LISTED_PAIR;
+    a += (ki + texelFetch(t_kappa, int(LISTED_INDEX)).x) * LISTED_GRADIENT;
+  }
   s_vel[k] = vec4(s_vel[k].xyz - P.gravity_dt.w * a, 0.0);
 }

@@ -18,11 +18,12 @@ void main() {
     float h2_ = P.dfsph_kernel.x, eps2 = P.dfsph_b.z, scale = viscosity_scale();
     vec3 product = vec3(0.0);
     FOR_EACH_LISTED(k) {
+      LISTED_PAIR;
       uint j = LISTED_INDEX;
       vec4 pj = texelFetch(t_pos, int(j));
       vec3 dx = pi.xyz - pj.xyz;
       float c = 2.0 * scale * (mui + pj.w) / ((rhoi + T_FIELD(j).x) * (dot(dx, dx) + eps2));
-      product += c * dot(vi - T_VISC(j, 3u).xyz, dx) * LISTED_TERM.xyz;
+      product += c * dot(vi - T_VISC(j, 3u).xyz, dx) * LISTED_GRADIENT;
     }
     if (P.counts.y > 0u) {
       NEIGHBOUR_RUNS(w_cell_start, pi) {

@@ -29,20 +29,24 @@ float walls(int i) { return texelFetch(t_walls, i).x; }
 // fetch costs a fraction of a storage-buffer load.
 layout(binding = BINDING_T_D_PARTICLE) uniform samplerBuffer t_dp;
 layout(binding = BINDING_T_S_VEL) uniform samplerBuffer t_vel;
+layout(binding = BINDING_T_D_KAPPA) uniform samplerBuffer t_kappa;
 #define T_FIELD(j) texelFetch(t_dp, int(12u * (j)))
-#define T_STIFF(j) texelFetch(t_dp, int(12u * (j) + 2u))
+// The stiffness increments again, packed (D_KAPPA): the pass that applies them reads one float
+// per neighbour from a small array instead of one vec4 from the 12 of its fields.
 #define T_VISC(j, m) texelFetch(t_dp, int(12u * (j) + 5u + (m)))
 
-// Each particle's fluid neighbours, listed by the density pass in the CPU's neighbour order with
-// their pair terms, and read by every later pass of the step instead of the 27 cells' candidates.
-layout(binding = BINDING_T_D_LIST_INDEX) uniform usamplerBuffer t_list_index;
-layout(binding = BINDING_T_D_LIST_TERM) uniform samplerBuffer t_list_term;
+// Each particle's fluid neighbours, listed by the density pass in the CPU's neighbour order, and
+// read by every later pass of the step instead of the 27 cells' candidates: per pair one vec4,
+// V_j grad W_ij (1/m) and the neighbour's index j as a float (exact below 2^24, which the host
+// checks), so that a pair costs one fetch of its own and one of the neighbour's field.
+layout(binding = BINDING_T_D_LIST) uniform samplerBuffer t_list;
 uint list_capacity() { return uint(P.dfsph_d.x); }
-// for (...) { uint j = LISTED_INDEX; vec4 term = LISTED_TERM; ... } over particle k's list.
+// for (...) { LISTED_PAIR; ... LISTED_INDEX ... LISTED_GRADIENT ... } over particle k's list.
 #define FOR_EACH_LISTED(k) \
   for (uint q_ = (k) * list_capacity(), e_ = q_ + min(uint(D_FIELD(k).w), list_capacity()); q_ < e_; ++q_)
-#define LISTED_INDEX texelFetch(t_list_index, int(q_)).x
-#define LISTED_TERM texelFetch(t_list_term, int(q_))
+#define LISTED_PAIR vec4 listed_ = texelFetch(t_list, int(q_))
+#define LISTED_INDEX uint(listed_.w)
+#define LISTED_GRADIENT listed_.xyz
 
 // The solve state (D_SOLVE), mirrored by vulkan_solver.cpp's DfsphState.
 #define SOLVE_GROUPS 0          // indirect dispatch arguments of the iterating passes: x, y, z

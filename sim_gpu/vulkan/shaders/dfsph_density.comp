@@ -3,15 +3,14 @@
 // Density and DFSPH factor (build_pairs): rho / rho0 = sum V_j W_ij over fluid and static solids
 // plus the walls' share; the factor 1 / (|sum_j V_j grad W_ij|^2 + sum_fluid |V_j grad W_ij|^2);
 // the solids' and walls' gradient sum; the neighbour counts; the list of fluid neighbours with
-// their pair terms. A list that would overflow is a fault the host reports.
+// their pair gradients. A list that would overflow is a fault the host reports.
 #include "dfsph_common.glsl"
 layout(std430, binding = BINDING_S_POS) readonly buffer SPos { vec4 s_pos[]; };
 layout(binding = BINDING_T_CELL_START) uniform usamplerBuffer cell_start;
 layout(binding = BINDING_T_S_POS) uniform samplerBuffer t_pos;
 layout(binding = BINDING_T_W_A) uniform samplerBuffer w_a;
 layout(binding = BINDING_T_W_CELL_START) uniform usamplerBuffer w_cell_start;
-layout(std430, binding = BINDING_D_LIST_INDEX) writeonly buffer ListIndex { uint list_index[]; };
-layout(std430, binding = BINDING_D_LIST_TERM) writeonly buffer ListTerm { vec4 list_term[]; };
+layout(std430, binding = BINDING_D_LIST) writeonly buffer List { vec4 list[]; };
 
 void main() {
   uint k = gl_GlobalInvocationID.x;
@@ -29,10 +28,7 @@ void main() {
           vec4 t = pair_term(d, volume);
           sf += t;
           g2 += dot(t.xyz, t.xyz);
-          if (n < cap) {
-            list_index[k * cap + n] = j;
-            list_term[k * cap + n] = t;
-          }
+          if (n < cap) list[k * cap + n] = vec4(t.xyz, float(j));
           ++n;
         }
       }

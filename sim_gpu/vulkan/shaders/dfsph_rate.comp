@@ -9,6 +9,7 @@
 #include "dfsph_common.glsl"
 layout(push_constant) uniform Push { uint mode; uint pad0, pad1, pad2; } pc;  // 0/1 divergence warm/iterate, 2/3 density
 layout(std430, binding = BINDING_S_VEL) readonly buffer SVel { vec4 s_vel[]; };
+layout(std430, binding = BINDING_D_KAPPA) writeonly buffer Kappa { float kappa[]; };
 
 void main() {
   uint k = gl_GlobalInvocationID.x;
@@ -26,7 +27,10 @@ void main() {
   if (k < P.counts.x) {
     vec3 vi = s_vel[k].xyz;
     vec3 s = vec3(0.0);
-    FOR_EACH_LISTED(k) s += LISTED_TERM.xyz * (vi - texelFetch(t_vel, int(LISTED_INDEX)).xyz);
+    FOR_EACH_LISTED(k) {
+      LISTED_PAIR;
+      s += LISTED_GRADIENT * (vi - texelFetch(t_vel, int(LISTED_INDEX)).xyz);
+    }
     vec4 f = D_FIELD(k);
     float rate = s.x + s.y + s.z + dot(vi, D_SOLID(k).xyz);
     if (density) {
@@ -47,6 +51,7 @@ void main() {
     }
     st.x = increment;
     D_STIFF(k) = st;
+    kappa[k] = increment;
   }
   write_group_partial(vec4(error, 0.0, 0.0, 0.0));
 }

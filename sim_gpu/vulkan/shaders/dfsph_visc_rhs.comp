@@ -21,10 +21,11 @@ void main() {
     float h2_ = P.dfsph_kernel.x, eps2 = P.dfsph_b.z, scale = viscosity_scale();
     vec3 diagonal = vec3(0.0), product = vec3(0.0), b = D_VISC(k, 0u).xyz;
     FOR_EACH_LISTED(k) {
+      LISTED_PAIR;
       uint j = LISTED_INDEX;
       vec4 pj = texelFetch(t_pos, int(j));
       vec3 dx = pi.xyz - pj.xyz;
-      vec3 g = LISTED_TERM.xyz;
+      vec3 g = LISTED_GRADIENT;
       float c = 2.0 * scale * (mui + pj.w) / ((rhoi + T_FIELD(j).x) * (dot(dx, dx) + eps2));
       diagonal -= c * dx * g;
       product += c * dot(vi - texelFetch(t_vel, int(j)).xyz, dx) * g;

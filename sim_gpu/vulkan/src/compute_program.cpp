@@ -14,7 +14,7 @@ VkDescriptorType binding_type(std::uint32_t binding) {
     case BINDING_T_S_POS: case BINDING_T_S_VEL: case BINDING_T_S_DENSITY: case BINDING_T_CELL_START:
     case BINDING_T_W_A: case BINDING_T_W_B: case BINDING_T_W_C: case BINDING_T_W_CELL_START:
     case BINDING_T_V_A: case BINDING_T_V_B: case BINDING_T_V_C: case BINDING_T_V_CELL_START: case BINDING_T_D_WALLS: case BINDING_T_D_PARTICLE:
-    case BINDING_T_D_LIST_INDEX: case BINDING_T_D_LIST_TERM:
+    case BINDING_T_D_LIST: case BINDING_T_D_KAPPA:
       return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
     default:
       return VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;

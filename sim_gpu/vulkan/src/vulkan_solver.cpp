@@ -87,8 +87,8 @@ struct VulkanSolver::Buffers {
   Buffer w_a, w_b, w_c, w_cell_start;
   Buffer b_pos, b_vel, b_rest, b_force, b_contact, b_pressure, v_a, v_b, v_c;
   Buffer body_state, body_chunks, body_partials, body_sums;
-  Buffer d_particle, d_solve, d_walls, d_list_index, d_list_term;
-  TexelView t_d_walls, t_d_particle, t_d_list_index, t_d_list_term;
+  Buffer d_particle, d_solve, d_walls, d_list, d_kappa;
+  TexelView t_d_walls, t_d_particle, t_d_list, t_d_kappa;
   TexelView t_s_pos, t_s_vel, t_s_density, t_cell_start, t_w_a, t_w_b, t_w_c, t_w_cell_start;
   TexelView t_v_a, t_v_b, t_v_c, t_v_cell_start;
 };
@@ -248,11 +248,19 @@ VulkanSolver::~VulkanSolver() {
 }
 
 void VulkanSolver::check_device_limits() const {
-  // The largest arrays: vec4 per particle (storage and texel views) and the cell tables.
+  // The largest arrays: vec4 per particle (storage and texel views), the cell tables, and with
+  // dfsph the solver's fields and neighbour lists (vec4 texels, per fluid particle).
   const VkPhysicalDeviceLimits& limits = context_->properties().limits;
   const std::uint64_t particles = std::max({fluid_count_, solid_count_, body_particle_count_});
-  const std::uint64_t largest_bytes = std::max<std::uint64_t>(16 * particles, 4ull * (body_start_base_ + cell_count_ + 1));
-  const std::uint64_t largest_texels = std::max<std::uint64_t>(particles, cell_count_ + 1);
+  const std::uint64_t per_fluid = dfsph_ ? std::max<std::uint64_t>(14, list_capacity(m_.params)) : 1;
+  const std::uint64_t largest_texels =
+      std::max<std::uint64_t>(std::max<std::uint64_t>(particles, per_fluid * fluid_count_), cell_count_ + 1);
+  const std::uint64_t largest_bytes = std::max<std::uint64_t>(16 * largest_texels, 4ull * (body_start_base_ + cell_count_ + 1));
+  // A listed neighbour's index is held as a float, exact up to 2^24.
+  if (dfsph_ && fluid_count_ > (1u << 24))
+    throw std::runtime_error("Vulkan backend: scene '" + m_.scene_name + "' has " + std::to_string(fluid_count_) +
+                             " fluid particles, more than the 16,777,216 the incompressible solver's neighbour "
+                             "lists index; use fewer particles or --backend cpu");
   if (largest_bytes > limits.maxStorageBufferRange || largest_texels > limits.maxTexelBufferElements)
     throw std::runtime_error("Vulkan backend: scene '" + m_.scene_name + "' needs arrays of " +
                              std::to_string(largest_bytes) + " bytes / " + std::to_string(largest_texels) +
@@ -308,10 +316,10 @@ void VulkanSolver::create_buffers() {
   b.d_particle = Buffer(c, vec4 * 14 * nd, kTexel, MemoryUse::device);
   b.t_d_particle = TexelView(c, b.d_particle, kVec4);
   const VkDeviceSize listed = dfsph_ ? nf * list_capacity(m_.params) : 1;
-  b.d_list_index = Buffer(c, u32 * listed, kTexel, MemoryUse::device);
-  b.d_list_term = Buffer(c, vec4 * listed, kTexel, MemoryUse::device);
-  b.t_d_list_index = TexelView(c, b.d_list_index, kUint);
-  b.t_d_list_term = TexelView(c, b.d_list_term, kVec4);
+  b.d_list = Buffer(c, vec4 * listed, kTexel, MemoryUse::device);
+  b.t_d_list = TexelView(c, b.d_list, kVec4);
+  b.d_kappa = Buffer(c, u32 * nd, kTexel, MemoryUse::device);
+  b.t_d_kappa = TexelView(c, b.d_kappa, VK_FORMAT_R32_SFLOAT);
   b.d_solve = Buffer(c, u32 * (kSolvePartials + 4 * groups(static_cast<std::uint32_t>(nd), 64)),
                      kStorage | VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT, MemoryUse::host);
   const std::vector<float> walls = dfsph_ ? wall_map_words(domain_wall_map(m_.params)) : std::vector<float>(20, 0.0f);
@@ -378,10 +386,10 @@ void VulkanSolver::create_buffers() {
   p.bind_storage(BINDING_D_SOLVE, b.d_solve);
   p.bind_texel(BINDING_T_D_WALLS, b.t_d_walls);
   p.bind_texel(BINDING_T_D_PARTICLE, b.t_d_particle);
-  p.bind_storage(BINDING_D_LIST_INDEX, b.d_list_index);
-  p.bind_storage(BINDING_D_LIST_TERM, b.d_list_term);
-  p.bind_texel(BINDING_T_D_LIST_INDEX, b.t_d_list_index);
-  p.bind_texel(BINDING_T_D_LIST_TERM, b.t_d_list_term);
+  p.bind_storage(BINDING_D_LIST, b.d_list);
+  p.bind_texel(BINDING_T_D_LIST, b.t_d_list);
+  p.bind_storage(BINDING_D_KAPPA, b.d_kappa);
+  p.bind_texel(BINDING_T_D_KAPPA, b.t_d_kappa);
   p.commit_bindings();
 }
 
