@@ -24,6 +24,14 @@ then run it free for its duration_s. Its records give the rms and largest fluid 
 and over the last second, each code's samples go to <case>/<code>/speeds.csv and both to
 <case>/speeds.png.
 
+A case of FRONT_CASES is the Martin & Moyce dam break judged by its surge front: both codes run
+the scene to the last measured time, the front (the third-farthest fluid particle plus half a
+spacing, from the column's back wall, over the column's width a; also where 1 % of the fluid
+lies beyond, which a thin jet along the floor does not move) is sampled every 10 ms, and each
+sample from T = 0.5 on is compared with the measurement (../shared/data, linear between its
+points). Its records give the largest and the mean relative front error of each code;
+<case>/front.png plots both against the measurement.
+
     bench_splishsplash.py --build build --out out/bench/bench_splishsplash.json [--case dam_break]
 """
 import argparse
@@ -51,6 +59,13 @@ CASES = {
 AT_REST_CASES = {
     "tank_at_rest_dfsph": ROOT / "sim_gpu/bench/tank_at_rest_dfsph.toml",
 }
+# Cases judged by where the dam break's surge front runs against the measurement (below).
+FRONT_CASES = {
+    "dam_break_front": ROOT / "config/scenes/dam_break.toml",
+}
+FRONT_DATA = ROOT.parent / "shared/data/martin_moyce_1952_n2_2_front.csv"
+FRONT_EVERY_S = 0.01  # both codes' samples of the front (the scene's frame period: haptic-sim exports on frames)
+FRONT_FROM_T = 0.5     # earlier, the experiment's gate was still being removed (its T < 0.5)
 AT_REST_EXPORT_EVERY_S = 0.1  # hapfluid's frames, as often as splishsplash_at_rest.py samples
 AT_REST_LAST_S = 1.0          # the summary's window: the last second of the run
 THREADS = 2
@@ -154,17 +169,21 @@ def summary_line(code: str, run: dict) -> str:
             f"load average {run['load_average_1min']:.1f} before")
 
 
-def hapfluid_at_rest(build: pathlib.Path, scene: pathlib.Path, duration_s: float, out: pathlib.Path) -> list:
-    """haptic-sim on a tank at rest: [(t, rms speed, max speed, mean density)] of its fluid, from
-    its VTK frames (kind 0 is fluid), and its solver iterations per step (stats.json)."""
+def hapfluid_frames(build: pathlib.Path, scene: pathlib.Path, duration_s: float, out: pathlib.Path, every_s: float):
+    """haptic-sim (cpu backend) on `scene` with VTK frames every `every_s`: [(t, frame)] of them."""
     command = [str(build / "bin/haptic-sim"), "--scene", str(scene), "--backend", "cpu", "--duration", repr(duration_s),
-               "--out", str(out), "--threads", str(THREADS), "--export-every", repr(AT_REST_EXPORT_EVERY_S)]
+               "--out", str(out), "--threads", str(THREADS), "--export-every", repr(every_s)]
     result = subprocess.run(command, timeout=RUN_TIMEOUT_S)
     if result.returncode != 0:
         raise RuntimeError(f"haptic-sim on {scene} exited {result.returncode}")
+    return [(t, vtk_frames.read_vtk(path)) for t, path in vtk_frames.read_series(out / "particles")]
+
+
+def hapfluid_at_rest(build: pathlib.Path, scene: pathlib.Path, duration_s: float, out: pathlib.Path) -> list:
+    """haptic-sim on a tank at rest: [(t, rms speed, max speed, mean density)] of its fluid, from
+    its VTK frames (kind 0 is fluid), and its solver iterations per step (stats.json)."""
     rows = []
-    for t, path in vtk_frames.read_series(out / "particles"):
-        frame = vtk_frames.read_vtk(path)
+    for t, frame in hapfluid_frames(build, scene, duration_s, out, AT_REST_EXPORT_EVERY_S):
         fluid = frame["kind"] == 0
         speed = np.linalg.norm(frame["velocity"][fluid], axis=1)
         rows.append((t, math.sqrt(float(np.mean(speed ** 2))), float(speed.max()), float(frame["density"][fluid].mean())))
@@ -189,6 +208,14 @@ def at_rest_metrics(rows: list, duration_s: float, rest_density: float) -> dict:
     }
 
 
+def save_plot(fig, ax, path: pathlib.Path):
+    import matplotlib.pyplot as plt
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def plot_speeds(path: pathlib.Path, name: str, runs: dict):
     import matplotlib
     matplotlib.use("Agg")
@@ -203,10 +230,7 @@ def plot_speeds(path: pathlib.Path, name: str, runs: dict):
     ax.set_xlabel("time after settling (s)")
     ax.set_ylabel("fluid speed (m/s)")
     ax.set_title(f"{name}: water at rest, same settling")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_plot(fig, ax, path)
 
 
 def at_rest_case(name: str, scene: pathlib.Path, build: pathlib.Path, work: pathlib.Path) -> list:
@@ -244,11 +268,103 @@ def at_rest_case(name: str, scene: pathlib.Path, build: pathlib.Path, work: path
     return records
 
 
+def read_front_table(path: pathlib.Path) -> tuple:
+    """The measured front (T, Z) of a ../shared/data table; ValueError names a missing or short file."""
+    if not path.exists():
+        raise ValueError(f"{path}: the measured dam-break front is missing (../shared/data beside the checkout)")
+    rows = []
+    for line in path.read_text().splitlines():
+        parts = line.split(",")
+        if len(parts) == 2 and not line.startswith("#"):
+            try:
+                rows.append((float(parts[0]), float(parts[1])))
+            except ValueError:
+                continue  # the header
+    if len(rows) < 10:
+        raise ValueError(f"{path}: {len(rows)} rows of T, Z; expected the measurement's 15")
+    return np.array([r[0] for r in rows]), np.array([r[1] for r in rows])
+
+
+def front_metrics(samples: list, table: tuple) -> dict:
+    """samples [(T, Z)] against the measured table from FRONT_FROM_T to its last T: the largest
+    and the mean relative error (Z - Z_measured) / Z_measured (> 0: ahead of the experiment)."""
+    T_table, Z_table = table
+    errors = [(Z - np.interp(T, T_table, Z_table)) / np.interp(T, T_table, Z_table)
+              for T, Z in samples if FRONT_FROM_T <= T <= T_table[-1]]
+    if len(errors) < 10:
+        raise ValueError(f"{len(errors)} front samples within T = {FRONT_FROM_T}-{T_table[-1]}; expected 10 or more")
+    worst = max(errors, key=abs)
+    return {"front_samples": len(errors), "front_worst_error": float(worst), "front_worst_abs_error": float(abs(worst)),
+            "front_mean_error": float(np.mean(errors)), "front_z_at_start": float(samples[0][1])}
+
+
+def plot_fronts(path: pathlib.Path, name: str, runs: dict, bulk_runs: dict, table: tuple):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for (code, samples), bulk, colour in zip(runs.items(), bulk_runs.values(), ("tab:blue", "tab:orange")):
+        ax.plot([T for T, _ in samples], [Z for _, Z in samples], color=colour, label=f"{code}: third-farthest")
+        ax.plot([T for T, _ in bulk], [Z for _, Z in bulk], color=colour, linestyle="--", label=f"{code}: 1 % beyond")
+    ax.plot(table[0], table[1], "ko", markersize=4, label="Martin & Moyce 1952")
+    ax.axvline(FRONT_FROM_T, color="grey", linewidth=0.8)
+    ax.set_xlabel("T = t sqrt(2 g / a)")
+    ax.set_ylabel("Z = front / a")
+    ax.set_title(f"{name}: surge front, same column")
+    save_plot(fig, ax, path)
+
+
+def front_case(name: str, scene: pathlib.Path, build: pathlib.Path, work: pathlib.Path) -> list:
+    table = read_front_table(FRONT_DATA)
+    case = splishsplash.load_case(scene)
+    lo, hi = case["blocks"][0]
+    a = hi[0] - lo[0]                     # the column's width
+    back = case["domain_min_m"][0]        # the wall the column stands against
+    g = abs(case["gravity_m_s2"][2])
+    to_T = math.sqrt(2 * g / a)
+    duration = float(table[0][-1]) / to_T + FRONT_EVERY_S
+    half = 0.5 * case["spacing_m"]
+
+    def as_fronts(rows, column):
+        return [(r[0] * to_T, (r[column] + half - back) / a) for r in rows]
+
+    progress(f"{name}: hapfluid, {scene.relative_to(ROOT)}, {duration:.3f} s, the front every {FRONT_EVERY_S} s ...")
+    out = work / "hapfluid"
+    out.mkdir(parents=True, exist_ok=True)
+    ours = [(t, *splishsplash.front_positions(frame["points"][frame["kind"] == 0][:, 0]))
+            for t, frame in hapfluid_frames(build, scene, duration, out, FRONT_EVERY_S)]
+    splishsplash.write_rows(out / "front.csv", splishsplash.FRONT_COLUMNS, ours)
+    progress(f"{name}: SPlisHSPlasH DFSPH, same scene ...")
+    theirs_out = work / "splishsplash"
+    theirs_out.mkdir(parents=True, exist_ok=True)
+    box = theirs_out / "box.obj"
+    box.write_text(splishsplash.UNIT_BOX_OBJ)
+    scene_path = theirs_out / "scene.json"
+    scene_path.write_text(json.dumps(splishsplash.scene_json(scene, box), indent=2) + "\n")
+    theirs = splishsplash.run_front(scene_path, FRONT_EVERY_S, duration, theirs_out, THREADS, RUN_TIMEOUT_S)
+    fronts = {"hapfluid": as_fronts(ours, 1), "SPlisHSPlasH": as_fronts(theirs, 1)}
+    bulk_fronts = {"hapfluid": as_fronts(ours, 2), "SPlisHSPlasH": as_fronts(theirs, 2)}
+    plot_fronts(work / "front.png", name, fronts, bulk_fronts, table)
+    records = []
+    for code, samples, bulk in zip(("hapfluid", "splishsplash"), fronts.values(), bulk_fronts.values()):
+        metrics = front_metrics(samples, table)
+        metrics.update({f"{k}_one_percent": v for k, v in front_metrics(bulk, table).items() if k != "front_samples"})
+        records.append({"bench": "bench_splishsplash",
+                        "params": {"case": name, "code": code, "solver": "dfsph", "threads": THREADS,
+                                   "column_width_m": a, "every_s": FRONT_EVERY_S},
+                        "metrics": metrics})
+        progress(f"{name}: {code}: front {100 * metrics['front_mean_error']:+.1f} % on average, "
+                 f"at most {100 * metrics['front_worst_error']:+.1f} % (T >= {FRONT_FROM_T}); with 1 % of the fluid "
+                 f"beyond it {100 * metrics['front_mean_error_one_percent']:+.1f} %, at most "
+                 f"{100 * metrics['front_worst_error_one_percent']:+.1f} %")
+    return records
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--build", type=pathlib.Path, default=ROOT / "build")
     parser.add_argument("--out", type=pathlib.Path, required=True)
-    parser.add_argument("--case", action="append", choices=sorted(CASES) + sorted(AT_REST_CASES),
+    parser.add_argument("--case", action="append", choices=sorted(CASES) + sorted(AT_REST_CASES) + sorted(FRONT_CASES),
                         help="run only this case (repeatable)")
     args = parser.parse_args()
     try:
@@ -257,10 +373,12 @@ def main():
         sys.exit(f"bench_splishsplash: {error}")
     work = args.out.resolve().parent / "splishsplash"
     records = []
-    for name in args.case or list(CASES) + list(AT_REST_CASES):
-        if name in AT_REST_CASES:
+    for name in args.case or list(CASES) + list(AT_REST_CASES) + list(FRONT_CASES):
+        judged = ((FRONT_CASES, front_case), (AT_REST_CASES, at_rest_case))
+        special = next(((cases[name], run) for cases, run in judged if name in cases), None)
+        if special:
             try:
-                records += at_rest_case(name, AT_REST_CASES[name], args.build.resolve(), work / name)
+                records += special[1](name, special[0], args.build.resolve(), work / name)
             except (RuntimeError, ValueError, OSError, subprocess.TimeoutExpired) as error:
                 sys.exit(f"bench_splishsplash: {name}: {error}")
             continue

@@ -22,6 +22,8 @@ import sys
 import time
 import tomllib
 
+import numpy as np
+
 SIMULATION_METHOD_DFSPH = 4
 BOUNDARY_VOLUME_MAPS = 2  # Bender et al. 2019, as SPlisHSPlasH's own DamBreakModel scene
 VISCOSITY_STANDARD = 1
@@ -253,18 +255,58 @@ def run(scene_path: pathlib.Path, stop_at_s: float, out_dir: pathlib.Path, threa
 
 
 AT_REST_DRIVER = pathlib.Path(__file__).resolve().parent / "splishsplash_at_rest.py"
+FRONT_DRIVER = pathlib.Path(__file__).resolve().parent / "splishsplash_front.py"
+FRONT_COLUMNS = ("t_s", "third_farthest_x_m", "one_percent_x_m")
+
+
+def front_positions(x) -> tuple:
+    """A dam break's front from its fluid particles' x: the third-farthest particle's x, and the x
+    with 1 % of the particles beyond it."""
+    x = np.sort(np.asarray(x, dtype=float))
+    return float(x[-3]), float(x[int(0.99 * (len(x) - 1))])
 SPEED_COLUMNS = ("t_s", "rms_speed_m_s", "max_speed_m_s", "mean_density_kg_m3")
 
 
-def write_speeds(path: pathlib.Path, rows: list):
-    """A tank-at-rest sample file, either code's: SPEED_COLUMNS, one row per sample, written whole."""
+def write_rows(path: pathlib.Path, columns: tuple, rows: list):
+    """A CSV of samples: its header, one row per sample, written whole (a .part renamed)."""
     path = pathlib.Path(path)
     part = path.with_suffix(".part")
     with part.open("w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(SPEED_COLUMNS)
+        writer.writerow(columns)
         writer.writerows(rows)
     part.rename(path)
+
+
+def write_speeds(path: pathlib.Path, rows: list):
+    """A tank-at-rest sample file, either code's: SPEED_COLUMNS, one row per sample."""
+    write_rows(path, SPEED_COLUMNS, rows)
+
+
+def run_driver(driver: pathlib.Path, scene_path: pathlib.Path, args: list, out_dir: pathlib.Path, threads: int,
+               timeout_s: float) -> str:
+    """One of the Python-API drivers beside this file on a scene JSON, with the wheel's
+    libGLdispatch preloaded and its own output in `out_dir` (splash.log: what it printed).
+    Returns its standard output; RuntimeError names the driver and the scene if it failed."""
+    out_dir = pathlib.Path(out_dir)
+    env = dict(os.environ, OMP_NUM_THREADS=str(threads), LD_PRELOAD=gl_dispatch_preload())
+    command = [sys.executable, str(driver), str(pathlib.Path(scene_path).resolve()), *args,
+               "--output-dir", str(out_dir.resolve())]
+    result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout_s)
+    (out_dir / "splash.log").write_text(result.stdout + result.stderr)
+    if result.returncode != 0:
+        raise RuntimeError(f"{driver.name} on {scene_path} exited {result.returncode}: "
+                           f"{(result.stderr or result.stdout)[-2000:]}")
+    return result.stdout
+
+
+def start_simulator(sph, program: str, scene_path: pathlib.Path, output_dir: pathlib.Path, stop_at_s: float):
+    """A driver's SPlisHSPlasH simulation, initialised, without a GUI: (simulator, fluid model, clock)."""
+    base = sph.Exec.SimulatorBase()
+    base.init([program, "--no-gui", "--no-cache", "--output-dir", str(pathlib.Path(output_dir).resolve()),
+               "--stopAt", repr(stop_at_s), str(pathlib.Path(scene_path).resolve())], program)
+    base.initSimulation()
+    return base, sph.Simulation.getCurrent().getFluidModel(0), sph.TimeManager.getCurrent()
 
 
 def run_at_rest(scene_path: pathlib.Path, settle_s: float, duration_s: float, out_dir: pathlib.Path, threads: int,
@@ -273,23 +315,27 @@ def run_at_rest(scene_path: pathlib.Path, settle_s: float, duration_s: float, ou
     settles, then `duration_s` free. Returns its samples [(t, rms speed, max speed, mean density)]
     and its mean DFSPH iterations per step ({"mean_pressure_iterations", "mean_divergence_iterations"},
     over the whole run, settling included)."""
-    out_dir = pathlib.Path(out_dir)
-    speeds = out_dir / "speeds.csv"
-    env = dict(os.environ, OMP_NUM_THREADS=str(threads), LD_PRELOAD=gl_dispatch_preload())
-    command = [sys.executable, str(AT_REST_DRIVER), str(pathlib.Path(scene_path).resolve()), "--settle-s", repr(settle_s),
-               "--kept", repr(SETTLE_VELOCITY_KEPT), "--duration", repr(duration_s), "--out", str(speeds.resolve()),
-               "--output-dir", str(out_dir.resolve())]
-    result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=timeout_s)
-    (out_dir / "splash.log").write_text(result.stdout + result.stderr)
-    if result.returncode != 0:
-        raise RuntimeError(f"{AT_REST_DRIVER.name} on {scene_path} exited {result.returncode}: "
-                           f"{(result.stderr or result.stdout)[-2000:]}")
+    speeds = pathlib.Path(out_dir) / "speeds.csv"
+    stdout = run_driver(AT_REST_DRIVER, scene_path, ["--settle-s", repr(settle_s), "--kept", repr(SETTLE_VELOCITY_KEPT),
+                                                     "--duration", repr(duration_s), "--out", str(speeds.resolve())],
+                        out_dir, threads, timeout_s)
     with speeds.open() as f:
         rows = list(csv.DictReader(f))
     samples = [tuple(float(r[c]) for c in SPEED_COLUMNS) for r in rows]
     iterations = {}
     for key in ("mean_pressure_iterations", "mean_divergence_iterations"):
-        found = re.findall(_SUMMARY[key], result.stdout, flags=re.MULTILINE)
+        found = re.findall(_SUMMARY[key], stdout, flags=re.MULTILINE)
         if found:
             iterations[key] = float(found[-1])
     return samples, iterations
+
+
+def run_front(scene_path: pathlib.Path, every_s: float, duration_s: float, out_dir: pathlib.Path, threads: int,
+              timeout_s: float) -> list:
+    """SPlisHSPlasH on a dam break (splishsplash_front.py): [(t, x of the third-farthest fluid
+    particle, x with 1 % of the fluid beyond)] at t = 0 and every `every_s` of simulated time."""
+    front = pathlib.Path(out_dir) / "front.csv"
+    run_driver(FRONT_DRIVER, scene_path, ["--every", repr(every_s), "--duration", repr(duration_s), "--out",
+                                          str(front.resolve())], out_dir, threads, timeout_s)
+    with front.open() as f:
+        return [tuple(float(r[c]) for c in FRONT_COLUMNS) for r in csv.DictReader(f)]

@@ -36,12 +36,7 @@ def main():
     if not (0.0 <= args.kept <= 1.0):
         sys.exit(f"splishsplash_at_rest: --kept {args.kept}: must be in [0, 1]")
 
-    base = sph.Exec.SimulatorBase()
-    base.init(["splishsplash_at_rest", "--no-gui", "--no-cache", "--output-dir", str(args.output_dir.resolve()),
-               "--stopAt", repr(args.settle_s + args.duration), str(args.scene.resolve())], "hapfluid at rest")
-    base.initSimulation()
-    model = sph.Simulation.getCurrent().getFluidModel(0)
-    clock = sph.TimeManager.getCurrent()
+    base, model, clock = splishsplash.start_simulator(sph, "splishsplash_at_rest", args.scene, args.output_dir, args.settle_s + args.duration)
     n = model.numActiveParticles()
     rows = []
     next_sample = [0.0]

@@ -4,6 +4,7 @@ of `splash` (a captured 2.19.0 run) must give the step time, step count and iter
 this needs the pysplishsplash wheel."""
 import math
 
+import numpy as np
 import pytest
 
 SAMPLE_LOG = "tests/scripts/splishsplash/dam_break_splash.log"
@@ -147,3 +148,22 @@ def test_at_rest_summary_is_the_last_seconds_rms_and_largest_speed(script):
     assert m["rms_speed_final_m_s"] == 0.0 and m["mean_density_error_final"] == pytest.approx(0.002)
     with pytest.raises(ValueError, match="no samples in the last 1.0 s of 10.0 s"):
         bench.at_rest_metrics(rows, 10.0, 1000.0)
+
+
+def test_front_errors_are_against_the_measurement_between_its_points_from_t_0_5(script, shared_dir, tmp_path):
+    bench = script("bench_splishsplash")
+    table = bench.read_front_table(shared_dir / "data/martin_moyce_1952_n2_2_front.csv")
+    assert len(table[0]) == 15 and table[0][0] == 0.41 and table[1][-1] == 4.11
+    T, Z = table
+    # 10 % ahead everywhere from T = 0.5 on; the samples before it (the gate's transient) do not count.
+    samples = [(0.0, 1.0), (0.45, 5.0)] + [(t, 1.1 * float(np.interp(t, T, Z))) for t in np.linspace(0.5, 3.3, 12)]
+    m = bench.front_metrics(samples, table)
+    assert m["front_samples"] == 12 and m["front_z_at_start"] == 1.0
+    assert m["front_mean_error"] == pytest.approx(0.10) and m["front_worst_abs_error"] == pytest.approx(0.10)
+    # Behind is negative, and the worst error keeps its sign.
+    samples[5] = (samples[5][0], 0.8 * float(np.interp(samples[5][0], T, Z)))
+    assert bench.front_metrics(samples, table)["front_worst_error"] == pytest.approx(-0.2)
+    with pytest.raises(ValueError, match="3 front samples within T = 0.5-3.33; expected 10 or more"):
+        bench.front_metrics(samples[:5], table)
+    with pytest.raises(ValueError, match="the measured dam-break front is missing"):
+        bench.read_front_table(tmp_path / "none.csv")
