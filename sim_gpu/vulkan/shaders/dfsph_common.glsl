@@ -29,10 +29,10 @@ float walls(int i) { return texelFetch(t_walls, i).x; }
 // fetch costs a fraction of a storage-buffer load.
 layout(binding = BINDING_T_D_PARTICLE) uniform samplerBuffer t_dp;
 layout(binding = BINDING_T_S_VEL) uniform samplerBuffer t_vel;
-layout(binding = BINDING_T_D_KAPPA) uniform samplerBuffer t_kappa;
-#define T_FIELD(j) texelFetch(t_dp, int(12u * (j)))
 // The stiffness increments again, packed (D_KAPPA): the pass that applies them reads one float
 // per neighbour from a small array instead of one vec4 from the 12 of its fields.
+layout(binding = BINDING_T_D_KAPPA) uniform samplerBuffer t_kappa;
+#define T_FIELD(j) texelFetch(t_dp, int(12u * (j)))
 #define T_VISC(j, m) texelFetch(t_dp, int(12u * (j) + 5u + (m)))
 
 // Each particle's fluid neighbours, listed by the density pass in the CPU's neighbour order, and

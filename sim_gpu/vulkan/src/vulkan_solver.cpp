@@ -253,9 +253,9 @@ void VulkanSolver::check_device_limits() const {
   const VkPhysicalDeviceLimits& limits = context_->properties().limits;
   const std::uint64_t particles = std::max({fluid_count_, solid_count_, body_particle_count_});
   const std::uint64_t per_fluid = dfsph_ ? std::max<std::uint64_t>(14, list_capacity(m_.params)) : 1;
-  const std::uint64_t largest_texels =
-      std::max<std::uint64_t>(std::max<std::uint64_t>(particles, per_fluid * fluid_count_), cell_count_ + 1);
-  const std::uint64_t largest_bytes = std::max<std::uint64_t>(16 * largest_texels, 4ull * (body_start_base_ + cell_count_ + 1));
+  const std::uint64_t vec4s = std::max<std::uint64_t>(particles, per_fluid * fluid_count_);
+  const std::uint64_t largest_texels = std::max<std::uint64_t>(vec4s, cell_count_ + 1);
+  const std::uint64_t largest_bytes = std::max<std::uint64_t>(16 * vec4s, 4ull * (body_start_base_ + cell_count_ + 1));
   // A listed neighbour's index is held as a float, exact up to 2^24.
   if (dfsph_ && fluid_count_ > (1u << 24))
     throw std::runtime_error("Vulkan backend: scene '" + m_.scene_name + "' has " + std::to_string(fluid_count_) +
