@@ -227,11 +227,7 @@ void VulkanSolver::read_solver_counters() {
 void VulkanSolver::note_recorded(VkCommandBuffer cb, const std::function<void()>& record) {
   const RecordedWork before = program_->recorded();
   record();
-  const RecordedWork& after = program_->recorded();
-  RecordedWork& w = work_of_[cb];
-  w.dispatches += after.dispatches - before.dispatches;
-  w.indirect_dispatches += after.indirect_dispatches - before.indirect_dispatches;
-  w.barriers += after.barriers - before.barriers;
+  work_of_[cb] += program_->recorded() - before;
 }
 
 VulkanSolver::~VulkanSolver() {

@@ -47,6 +47,13 @@ enum class Barrier {
 // Commands recorded so far by one program (summed over every command buffer it recorded into).
 struct RecordedWork {
   std::uint64_t dispatches = 0, indirect_dispatches = 0, barriers = 0;
+  RecordedWork& operator+=(const RecordedWork& o) {
+    dispatches += o.dispatches, indirect_dispatches += o.indirect_dispatches, barriers += o.barriers;
+    return *this;
+  }
+  RecordedWork operator-(const RecordedWork& o) const {
+    return {dispatches - o.dispatches, indirect_dispatches - o.indirect_dispatches, barriers - o.barriers};
+  }
 };
 
 class ComputeProgram {
