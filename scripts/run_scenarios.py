@@ -25,7 +25,11 @@ with a live run below RT factor 0.9 (LIVE_RTF_FOR_PHYSICS) is therefore also run
 (haptic-sim, the scene's scripted hands at their speed in simulated time, no wall clock): its
 figure and its check are the batch run's, the live run's figure is <figure>_live.png, and the
 table says which one was judged. Stirring and the probe are always judged live: what the hand
-felt against its own velocity, one clock, a claim any real-time factor keeps.
+felt against its own velocity, one clock, a claim any real-time factor keeps. Fig. 10 is always
+judged in batch: it compares four runs by a few per cent, which asks for the same hand motion in
+each, and live each run sees the script through its own timing (one lagging step stretched a
+glass's 0.12 s stop ramp to 0.30 s, and the fluid then takes more of the spin than a more viscous
+container gives it).
 
 Writes out/scenarios/<scenario>/<scene>/ (launcher run folders, batch/ beside sim/), fig8_stirring.png,
 alg1_probe.png, fig9_pouring.png, fig10_spinning_glass.png, fig11_bucket.png, crepe.png and scenarios.json (per
@@ -55,6 +59,7 @@ SCENARIOS = {
 LIVE_RTF_FOR_PHYSICS = 0.9
 LEAD_IN_S = 3.0  # as the launcher's default; the plots' --hand-offset
 LIVE_ONLY = {"stirring", "probe"}
+JUDGED_IN_BATCH = {"glass"}
 SUMMARY_KEYS = ("ok", "sim_backend", "sim_steps_per_s", "real_time_factor", "sim_kept_up", "fluid_particles",
                 "max_force_on_hand_n", "wake_latency_us", "cyclictest_us", "script_offset_s")
 
@@ -140,7 +145,7 @@ def main():
             if not table[scene]["ok"]:
                 failed.append(f"{scene} (run failed: {folder / 'logs'})")
         slow = min(table[s].get("real_time_factor") or 0 for s in scenes) < LIVE_RTF_FOR_PHYSICS
-        batch = slow and key not in LIVE_ONLY
+        batch = (slow and key not in LIVE_ONLY) or key in JUDGED_IN_BATCH
         if batch and not all(run_batch(scene, folder, args) for scene, folder in zip(scenes, folders)):
             failed.append(f"{key}: batch run failed")
         live_png = out / (png.replace(".png", "_live.png") if batch else png)
