@@ -10,7 +10,9 @@ panel and a torque panel per device (fig. 8, 9, 11); several runs are overlaid, 
                      [--scene NAME] [--component norm|x|y|z] [--torque-component norm|x|y|z]
 
 --scene picks the components the paper's figure of that scene shows (SCENE_COMPONENTS); --component
-and --torque-component override it. Without either: the norms.
+and --torque-component override it. Without either: the norms. Where the scene says so (the spinning
+glass), a third panel shows the fluid's own torque on the held body, from the bodies.csv beside
+couplings.csv: the hand's torque is mostly the body's own inertia, the same in every run.
 """
 import argparse
 import csv
@@ -35,11 +37,12 @@ class Components:
     torque_by_device: {device: (component, meaning)} where one hand turns about another axis."""
 
     def __init__(self, force="norm", torque="norm", force_meaning="", torque_meaning="", torque_by_device=None,
-                 hand_velocity=False):
+                 hand_velocity=False, fluid_torque=False):
         self.force, self.torque = force, torque
         self.force_meaning, self.torque_meaning = force_meaning, torque_meaning
         self.torque_by_device = torque_by_device or {}
         self.hand_velocity = hand_velocity  # draw the hand's velocity along the force component (--hand)
+        self.fluid_torque = fluid_torque  # a panel of the fluid's torque on the held body (bodies.csv)
 
     def torque_for(self, device: str) -> tuple[str, str]:
         return self.torque_by_device.get(device, (self.torque, self.torque_meaning))
@@ -54,7 +57,7 @@ SCENE_COMPONENTS = {
     # A 3-DoF probe renders forces only: its torque panel shows the zero the device gets.
     "probe_3dof": Components("x", "norm", "along the stroke", "3-DoF: forces only", hand_velocity=True),
     "bowl_pouring": Components("z", "y", "vertical, - = down", "tilt axis"),
-    "spinning_glass": Components("norm", "z", "", "spin axis"),
+    "spinning_glass": Components("norm", "z", "", "spin axis", fluid_torque=True),
     "bucket_bimanual": Components("z", "y", "vertical, - = down", "tilt axis"),
     # The bowl is tilted about y to pour, the pan about x (its handle) to spread the batter.
     "crepe": Components("z", "y", "vertical, - = down", "pouring tilt axis", {"right": ("x", "spreading tilt axis")}),
@@ -102,6 +105,32 @@ def read_wrenches(path: pathlib.Path, time_column: str = "t", time_offset_s: flo
     if not series:
         sys.exit(f"plot_wrenches: {path}: no rows")
     return series
+
+
+def read_fluid_torque(couplings: pathlib.Path, body: str, device_rows: dict, time_column: str, time_offset_s: float):
+    """{"t", "tx", "ty", "tz"} of the fluid's torque on `body` from the bodies.csv beside a
+    couplings.csv (its rows in simulated time: on the wall clock they are placed by the device's
+    coupling rows, which carry both clocks), or None when there is no such file or body."""
+    path = couplings.parent / "bodies.csv"
+    if not body or not path.is_file():
+        return None
+    with path.open(newline="") as f:
+        rows = [r for r in csv.DictReader(f) if r.get("body") == body]
+    if not rows:
+        return None
+    try:
+        data = {c: np.array([float(r[c]) for r in rows]) for c in ("t", "tx", "ty", "tz")}
+    except (KeyError, TypeError, ValueError):
+        sys.exit(f"plot_wrenches: {path}: rows of '{body}' need numeric t, tx, ty, tz")
+    if time_column != "t":
+        with couplings.open(newline="") as f:
+            clocks = [(float(r["t"]), float(r[time_column])) for r in csv.DictReader(f) if r.get("device") in device_rows]
+        if len(clocks) < 2:
+            return None
+        sim_t, other = np.array(clocks).T
+        data["t"] = np.interp(data["t"], sim_t, other)
+    data["t"] = data["t"] - time_offset_s
+    return data
 
 
 def component(data, prefix, which):
@@ -196,19 +225,35 @@ def main():
     if len(offsets) != len(args.runs):
         sys.exit("plot_wrenches: --time-offset needs one value, or one per run")
     time_column = "t" if args.time == "sim" else "wall_s"
-    runs = [read_wrenches(find_csv(p), time_column, o) for p, o in zip(args.runs, offsets)]
+    csvs = [find_csv(p) for p in args.runs]
+    runs = [read_wrenches(c, time_column, o) for c, o in zip(csvs, offsets)]
     devices = sorted({d for run in runs for d in run})
     scene = load_scene(args.scene)
+    fluid = {}  # (run, device): the fluid's torque on the body the device holds
+    if chosen.fluid_torque and chosen.torque != "norm":
+        for k, (c, o) in enumerate(zip(csvs, offsets)):
+            for device in devices:
+                body = held_bodies(scene, device)
+                data = read_fluid_torque(c, body, {device}, time_column, o) if "," not in body else None
+                if data is not None:
+                    fluid[(k, device)] = data
     motions = scripted_motions(scene) if on_script_clock else {}
     xlabel = {("sim", False): "simulated time (s)", ("wall", False): "wall-clock time since the sim started (s)",
               ("sim", True): "scene time: simulated time, 0 = the script's start (s)",
               ("wall", True): "scene time: the hand's clock, 0 = the script's start (s)"}[(args.time, on_script_clock)]
 
-    fig, axes = plt.subplots(2, len(devices), figsize=(6.5 * len(devices), 6.5), sharex=True, squeeze=False)
+    panels = 3 if fluid else 2
+    fig, axes = plt.subplots(panels, len(devices), figsize=(6.5 * len(devices), 3.25 * panels), sharex=True,
+                             squeeze=False)
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     for col, device in enumerate(devices):
         force_ax, torque_ax = axes[0][col], axes[1][col]
         torque, torque_meaning = chosen.torque_for(device)
+        fluid_ax = axes[2][col] if fluid else None
+        for k, label in enumerate(labels):
+            if (k, device) in fluid:
+                fluid_ax.plot(fluid[(k, device)]["t"], fluid[(k, device)]["t" + torque], color=colours[k % len(colours)],
+                              label=label if len(runs) > 1 else None, lw=1.2)
         for k, (run, label) in enumerate(zip(runs, labels)):
             if device not in run:
                 continue
@@ -229,8 +274,10 @@ def main():
         force_ax.set_title(f"{device} ({body})" if body else device)
         force_ax.set_ylabel(axis_label("force", chosen.force, chosen.force_meaning, "N"))
         torque_ax.set_ylabel(axis_label("torque", torque, torque_meaning, "N·m"))
-        torque_ax.set_xlabel(xlabel)
-        for ax in (force_ax, torque_ax):
+        if fluid_ax is not None:
+            fluid_ax.set_ylabel(f"fluid's torque on {held_bodies(scene, device)} {torque}\n(of the hand's above) (N·m)")
+        (fluid_ax or torque_ax).set_xlabel(xlabel)
+        for ax in (force_ax, torque_ax, fluid_ax) if fluid_ax is not None else (force_ax, torque_ax):
             ax.grid(alpha=0.3)
             ax.axhline(0.0, color="0.3", lw=0.6)
             mark_motions(ax, motions.get(device, []), label=ax is force_ax)

@@ -5,6 +5,7 @@ import subprocess
 import sys
 
 import matplotlib.image
+import pytest
 
 
 def write_history(path, devices, rows=200, gain=1.0):
@@ -77,3 +78,33 @@ def test_a_scene_on_the_script_clock_gets_its_motions_marked(source_dir, tmp_pat
                  "--time", "wall", "--time-offset", "0.5")
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "fig8.png").stat().st_size > 10_000
+
+
+def test_the_glass_figure_adds_the_fluids_torque_on_the_glass(source_dir, tmp_path):
+    # Fig. 10: the hand's torque is mostly the glass's own inertia; with a bodies.csv beside the
+    # couplings, a third panel shows the fluid's torque on the glass, placed on the wall clock by
+    # the coupling rows (here the wall clock runs 0.5 s ahead of simulated time).
+    lines = ["t,wall_s,device,body,fx,fy,fz,tx,ty,tz"]
+    lines += [f"{i * 0.01:.2f},{i * 0.01 + 0.5:.2f},hand,glass,0,0,-4.4,0,0,{0.02 * math.sin(i * 0.03):.5f}"
+              for i in range(600)]
+    (tmp_path / "couplings.csv").write_text("\n".join(lines) + "\n")
+    bodies = ["t,body,px,py,pz,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz"]
+    bodies += [f"{i * 0.04:.2f},glass,0,0,0,1,0,0,0,0,0,0,0,0,6.28,0,0,0,0,0,{0.004 * math.sin(i * 0.12):.5f}"
+               for i in range(150)]
+    figures = {}
+    for name in ("without", "with"):
+        if name == "with":
+            (tmp_path / "bodies.csv").write_text("\n".join(bodies) + "\n")
+        result = run(source_dir, tmp_path, "--out", tmp_path / f"{name}.png", "--scene", "spinning_glass_10",
+                     "--time", "wall", "--time-offset", "0.5")
+        assert result.returncode == 0, result.stderr
+        figures[name] = matplotlib.image.imread(tmp_path / f"{name}.png").shape
+    # Three panels instead of two, one column: half again as tall, as wide.
+    assert figures["with"][1] == figures["without"][1]
+    assert figures["with"][0] == round(figures["without"][0] * 1.5)
+
+    from hapfluid import plot_wrenches as plot
+    fluid = plot.read_fluid_torque(tmp_path / "couplings.csv", "glass", {"hand"}, "wall_s", 0.5)
+    assert fluid["t"][:3].tolist() == pytest.approx([0.0, 0.04, 0.08])  # sim time on the wall clock, minus the offset
+    assert fluid["tz"][10] == pytest.approx(0.004 * math.sin(1.2), abs=1e-5)
+    assert plot.read_fluid_torque(tmp_path / "couplings.csv", "bucket", {"hand"}, "wall_s", 0.5) is None
