@@ -139,7 +139,9 @@ TEST(LoopDeviceFaults, ADeviceThatRebootedIsTakenUpThroughLinkRecovery) {
   EXPECT_FALSE(l.device->last.enable);
   while (link_invalid() && shm::monotonic_ns() - restart_ns < 2'000'000'000ull) {
     l.ticks(1);
-    if (link_invalid()) EXPECT_FALSE(l.device->last.enable);
+    if (link_invalid()) {
+      EXPECT_FALSE(l.device->last.enable);
+    }
   }
   EXPECT_FALSE(link_invalid()) << "never recovered";
   EXPECT_GE(double(shm::monotonic_ns() - restart_ns) * 1e-6, 100.0) << "recovered before link_recover_ms";
