@@ -475,6 +475,7 @@ int run_live(const LiveOptions& o) {
       s.sim_time_s = solver->time_s();
       s.threads_active = cpu_backend ? static_cast<std::uint32_t>(active_threads) : 0;
       s.device_tick = have_devices ? devices.tick : 0;
+      s.pose_lead_s = dt;  // held[]: device_state_after(the pose read, dt)
       s.body_count = static_cast<std::uint32_t>(std::min<std::size_t>(m.bodies.size(), shm::kMaxBodies));
       for (std::uint32_t b = 0; b < s.body_count; ++b) {
         const RigidBody& body = m.bodies[b];
@@ -497,12 +498,17 @@ int run_live(const LiveOptions& o) {
         put4(x0.orientation, cm.q0);
         put3(x0.linear_velocity, cm.v0_m_s);
         put3(x0.angular_velocity, cm.w0_rad_s);
-        Vec3 f, t;
+        Vec3 f, t, k_v, kr_w;
         for (const VirtualCoupling& vc : m.couplings) {
           if (vc.device != std::size_t(d)) continue;
           // The coupling's spring-damper is the local model of the hand's wrench (§4.4): on the
-          // hand it is -K (x - x_grasp) + D (v_grasp - v), hence F = F0 - K (x - x0) + D (v0 - v).
+          // hand it is -K (x - x_grasp) + D (v_grasp - v), hence F = F0 - K (x - x0) + D (v0 - v),
+          // with x_grasp moving on at the grasp's velocity until the next sample.
           f = f + vc.device_force, t = t + vc.device_torque;
+          const RigidBody& body = m.bodies[vc.body];
+          const Vec3 grasp = body.position + body.rotation() * (vc.grasp_position - body.com_in_mesh_frame);
+          k_v = k_v + body.velocity_at(grasp) * vc.linear_stiffness_n_per_m;
+          kr_w = kr_w + body.angular_velocity * vc.angular_stiffness_nm_per_rad;
           cm.stiffness_n_per_m += vc.linear_stiffness_n_per_m;
           cm.damping_n_s_per_m += vc.linear_damping_n_s_per_m;
           cm.angular_stiffness_nm_per_rad += vc.angular_stiffness_nm_per_rad;
@@ -511,6 +517,9 @@ int run_live(const LiveOptions& o) {
         }
         put3(f, cm.force_n);
         put3(t, cm.torque_nm);
+        // One anchor for the device's springs: their grasps' twists, weighted as the springs pull.
+        if (cm.stiffness_n_per_m > 0) put3(k_v * (1.0 / cm.stiffness_n_per_m), cm.vref_m_s);
+        if (cm.angular_stiffness_nm_per_rad > 0) put3(kr_w * (1.0 / cm.angular_stiffness_nm_per_rad), cm.wref_rad_s);
       }
       s.publish_ns = shm::monotonic_ns();
       samples_writer.publish(s);

@@ -104,7 +104,11 @@ TEST(LoopAllocations, LoopAllocatesNothingAndTakesNoLockAfterStartUp) {
         m.q0[0] = 1;
         m.stiffness_n_per_m = 300;
         m.damping_n_s_per_m = 2;
+        m.angular_stiffness_nm_per_rad = 0.5;
+        m.vref_m_s[0] = 0.1;  // the anchor moving on: the ring of poll times is read every tick
+        m.wref_rad_s[2] = 2.0;
       }
+      sample.device_tick = static_cast<std::uint64_t>(step) + 1;
       if (step % 50 == 7) sample.couplings[0].force_n[0] = NAN;  // hostile sample
       sample.sequence = step;
       sample.publish_ns = shm::monotonic_ns();

@@ -46,12 +46,10 @@ TEST(LoopTrace, EveryRecordNamesTheStateFrameUsedTheCommandSentAndTheSimSamplesD
   config::Rig rig = rt_test::one_device_rig("arm", "trace-test", 64);
   auto owned = std::make_unique<NumberedDevice>();
   NumberedDevice* device = owned.get();
-  std::vector<std::unique_ptr<device::Device>> devices;
-  devices.push_back(std::move(owned));
-  rt::RtLoop loop(rig, std::move(devices));
-  const std::string sim_name = shm::segment_name(rig.rt.shm.prefix, shm::ChannelKind::sim_samples);
-  auto sim = shm::LatestWriter::create(sim_name, shm::ChannelKind::sim_samples, sizeof(shm::SimSample));
-  rt::SimAttachment attachment{shm::LatestReader::attach(sim_name, shm::ChannelKind::sim_samples, sizeof(shm::SimSample)), 1};
+  auto owned_loop = rt_test::one_device_loop(rig, std::move(owned));
+  rt::RtLoop& loop = *owned_loop;
+  auto test_sim = rt_test::test_sim(rig);
+  shm::LatestWriter& sim = test_sim->writer;
 
   std::uint64_t now = shm::monotonic_ns();
   auto tick = [&] {
@@ -61,7 +59,7 @@ TEST(LoopTrace, EveryRecordNamesTheStateFrameUsedTheCommandSentAndTheSimSamplesD
   for (int i = 0; i < 3; ++i) tick();
   EXPECT_EQ(loop.last_trace().sim_device_tick, 0u) << "no sim sample yet";
 
-  loop.offer_sim(&attachment);
+  loop.offer_sim(&test_sim->attachment);
   shm::SimSample sample{};
   sample.device_tick = 2;  // computed from the pose the loop published at tick 2
   sample.publish_ns = shm::monotonic_ns();

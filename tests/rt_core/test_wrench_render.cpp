@@ -103,10 +103,10 @@ TEST(CouplingMode, DeviceStepChangesTheWrenchOnTheVeryNextTick) {
   auto m = model_at_origin(500, 0);
   Twist6 at_rest{};
   std::uint32_t capped = 0;
-  EXPECT_NEAR(render_coupling(m, at_rest, kCaps, capped).force_n.z, 1.0, 1e-12);
+  EXPECT_NEAR(render_coupling(m, at_rest, kCaps, 0.0, capped).force_n.z, 1.0, 1e-12);
   Twist6 pushed = at_rest;
   pushed.position_m.x = 0.001;
-  Wrench w = render_coupling(m, pushed, kCaps, capped);
+  Wrench w = render_coupling(m, pushed, kCaps, 0.0, capped);
   EXPECT_NEAR(w.force_n.x, -0.5, 1e-12) << "the spring opposes the displacement";
   EXPECT_NEAR(w.force_n.z, 1.0, 1e-12);
   EXPECT_EQ(capped, 0u);
@@ -118,7 +118,7 @@ TEST(CouplingMode, DampingOpposesRelativeVelocityAndTorqueOpposesRotation) {
   moving.linear_velocity_m_s = {0, 0.1, 0};
   moving.orientation = safety::Quat{std::cos(0.05), 0, 0, std::sin(0.05)};  // 0.1 rad about z
   std::uint32_t capped = 0;
-  Wrench w = render_coupling(m, moving, kCaps, capped);
+  Wrench w = render_coupling(m, moving, kCaps, 0.0, capped);
   EXPECT_NEAR(w.force_n.y, -0.4, 1e-12);
   EXPECT_NEAR(w.torque_nm.z, -0.2, 1e-9);  // -2 N*m/rad * 0.1 rad
 }
@@ -131,12 +131,12 @@ TEST(CouplingMode, StiffnessIsCappedAndNegativeGainsAreRefused) {
   pushed.position_m.x = 0.001;
   pushed.linear_velocity_m_s.x = 1.0;
   std::uint32_t capped = 0;
-  Wrench w = render_coupling(m, pushed, kCaps, capped);
+  Wrench w = render_coupling(m, pushed, kCaps, 0.0, capped);
   EXPECT_NEAR(w.force_n.x, -2.0, 1e-12);
   EXPECT_EQ(capped, safety::flag_stiffness_capped);
   m.stiffness_n_per_m = -500;
   m.damping_n_s_per_m = 0;
-  EXPECT_NEAR(render_coupling(m, pushed, kCaps, capped).force_n.x, 0.0, 1e-12);
+  EXPECT_NEAR(render_coupling(m, pushed, kCaps, 0.0, capped).force_n.x, 0.0, 1e-12);
 }
 
 TEST(CouplingMode, DampingIsCappedLikeStiffness) {
@@ -150,10 +150,61 @@ TEST(CouplingMode, DampingIsCappedLikeStiffness) {
   moving.linear_velocity_m_s = {0, 0.1, 0};
   moving.angular_velocity_rad_s = {1.0, 0, 0};
   std::uint32_t capped = 0;
-  Wrench w = render_coupling(m, moving, kCaps, capped);
+  Wrench w = render_coupling(m, moving, kCaps, 0.0, capped);
   EXPECT_NEAR(w.force_n.y, -2.0, 1e-12);
   EXPECT_NEAR(w.torque_nm.x, -0.2, 1e-12);
   EXPECT_EQ(capped, safety::flag_damping_capped) << "damping, not stiffness, was capped";
+}
+
+TEST(CouplingMode, TheAnchorMovesOnWithTheGraspBetweenSamples) {
+  // A glass spun at 6.283 rad/s about z, carried along by the hand: 5 ms after the pose x0/q0
+  // the hand has turned 31.4 mrad further and its grip moved 1 mm along +x at 0.2 m/s. The sim's
+  // grasp moved with it (vref, wref), so the hand feels F0/tau0, not K v h = 0.5 N and
+  // Kr w h = 62.8 mN*m of drag that only the sample's age made.
+  auto m = model_at_origin(500, 0);
+  m.torque_nm[2] = 0.004;
+  m.vref_m_s[0] = 0.2;
+  m.wref_rad_s[2] = 6.283;
+  const double h = 0.005, angle = 6.283 * h;
+  Twist6 carried{};
+  carried.position_m.x = 0.2 * h;
+  carried.orientation = safety::Quat{std::cos(angle / 2), 0, 0, std::sin(angle / 2)};
+  std::uint32_t capped = 0;
+  Wrench w = render_coupling(m, carried, kCaps, h, capped);
+  EXPECT_NEAR(w.force_n.x, 0.0, 1e-12);
+  EXPECT_NEAR(w.force_n.z, 1.0, 1e-12);
+  EXPECT_NEAR(w.torque_nm.z, 0.004, 1e-12);
+  // The same hand against a grasp the sim holds still (a body stopped at a wall): the whole
+  // stretch is felt, at once.
+  m.vref_m_s[0] = 0, m.wref_rad_s[2] = 0;
+  w = render_coupling(m, carried, kCaps, h, capped);
+  EXPECT_NEAR(w.force_n.x, -500 * 0.2 * h, 1e-12);
+  EXPECT_NEAR(w.torque_nm.z, 0.004 - 2.0 * angle, 1e-12);
+  // At age 0 the anchor is x0/q0 whatever its twist: the model the sim solved for.
+  m.vref_m_s[0] = 0.2, m.wref_rad_s[2] = 6.283;
+  EXPECT_NEAR(render_coupling(m, Twist6{}, kCaps, 0.0, capped).torque_nm.z, 0.004, 1e-12);
+  // Before the pose x0 (the sim moved the pose it read on by its step): the anchor is behind x0.
+  EXPECT_NEAR(render_coupling(m, Twist6{}, kCaps, -0.005, capped).force_n.x, -500 * 0.2 * 0.005, 1e-12);
+  // A non-finite age is no age.
+  for (double bad : {double(NAN), double(INFINITY)})
+    EXPECT_NEAR(render_coupling(m, Twist6{}, kCaps, bad, capped).force_n.x, 0.0, 1e-12) << bad;
+  // A half turn in the anchor: the rotation is composed exactly, not added as a small angle.
+  m.wref_rad_s[2] = 3.0;
+  Twist6 turned{};
+  turned.orientation = safety::Quat{std::cos(0.75), 0, 0, std::sin(0.75)};  // 1.5 rad
+  EXPECT_NEAR(render_coupling(m, turned, kCaps, 0.5, capped).torque_nm.z, 0.004, 1e-12);
+}
+
+TEST(CouplingMode, ANonFiniteAnchorTwistGivesANonFiniteWrenchForTheSafetyLayerToZero) {
+  // The safety layer zeroes a non-finite command and flags it; an anchor rate that is NaN or
+  // infinite must reach it as such, not be normalised into "no rotation".
+  for (int field = 0; field < 2; ++field)
+    for (double bad : {double(NAN), double(INFINITY)}) {
+      auto m = model_at_origin(500, 0);
+      (field == 0 ? m.vref_m_s : m.wref_rad_s)[1] = bad;
+      std::uint32_t capped = 0;
+      EXPECT_FALSE(safety::finite(render_coupling(m, Twist6{}, kCaps, 0.005, capped))) << field << " " << bad;
+    }
 }
 
 TEST(Workspace, MappingScalesAndRotatesPosesAndWrenchesConsistently) {

@@ -133,6 +133,20 @@ double RtLoop::sim_age_ms(std::uint64_t now) const {
   return double(since_arrival > since_publish ? since_arrival : since_publish) * 1e-6;
 }
 
+double RtLoop::pose_age_s(const shm::SimSample& s, double cap_s) const {
+  // The couplings' pose x0 against this tick's device pose, both by when they were polled: since
+  // device_tick's poll, less the lead the sim moved that pose on by (so negative right after the
+  // poll), at most cap_s. A tick from the future or none (0): no age. One older than the ring
+  // remembers, or from a loop before a restart (its time unknown): the cap. A lead that is no
+  // number, negative or beyond the cap: none.
+  if (s.device_tick == 0 || s.device_tick > current_tick_) return 0.0;
+  const double lead = std::isfinite(s.pose_lead_s) && s.pose_lead_s >= 0 && s.pose_lead_s <= cap_s ? s.pose_lead_s : 0.0;
+  if (current_tick_ - s.device_tick >= kPollTimes) return cap_s;
+  const std::uint64_t then = poll_ns_[s.device_tick % kPollTimes], polled = poll_ns_[current_tick_ % kPollTimes];
+  if (then == 0 || then > polled) return cap_s;
+  return std::min(double(polled - then) * 1e-9 - lead, cap_s);
+}
+
 void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, bool new_sample) {
   bool valid = state_valid(d.state);
   Twist6 scene = d.workspace.to_scene(valid ? device_twist(d.state) : Twist6{});
@@ -146,7 +160,9 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
                                              now);
     scene_command = d.interpolator.render(now);
   } else if (coupled) {
-    scene_command = render_coupling(model, scene, d.caps, capped);
+    // Past the staleness limit the safety layer ramps the wrench out; the anchor stops there too.
+    const double cap_s = d.safety.config().sim_stale_ms * 1e-3;
+    scene_command = render_coupling(model, scene, d.caps, pose_age_s(sample_, cap_s), capped);
   }
 
   device::DeviceHealth health = d.device->health();
@@ -242,6 +258,8 @@ void RtLoop::tick(std::uint64_t scheduled_ns, std::uint64_t wake_ns) {
     for (auto& d : devices_) d->safety.reset_estop();
 
   std::uint64_t io_start = now_ns();
+  current_tick_ = tick;
+  poll_ns_[tick % kPollTimes] = io_start;
   for (auto& d : devices_) {
     d->fresh = d->device->poll(d->state);
     LinkQuality& q = d->link;

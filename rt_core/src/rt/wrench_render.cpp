@@ -1,6 +1,7 @@
 #include "hapfluid/rt/wrench_render.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "hapfluid/safety/flags.hpp"
 
@@ -42,7 +43,8 @@ double capped_gain(double gain, double cap, std::uint32_t flag, std::uint32_t& f
 }
 }  // namespace
 
-Wrench render_coupling(const shm::CouplingModel& m, const Twist6& d, const CouplingCaps& caps, std::uint32_t& flags) {
+Wrench render_coupling(const shm::CouplingModel& m, const Twist6& d, const CouplingCaps& caps, double age_s,
+                       std::uint32_t& flags) {
   const double k = capped_gain(m.stiffness_n_per_m, caps.max_stiffness_n_per_m, safety::flag_stiffness_capped, flags);
   const double kr = capped_gain(m.angular_stiffness_nm_per_rad, caps.max_angular_stiffness_nm_per_rad,
                                 safety::flag_stiffness_capped, flags);
@@ -50,9 +52,14 @@ Wrench render_coupling(const shm::CouplingModel& m, const Twist6& d, const Coupl
   const double angular_damping = capped_gain(m.angular_damping_nm_s_per_rad, caps.max_angular_damping_nm_s_per_rad,
                                              safety::flag_damping_capped, flags);
   using safety::from;
-  V3 dx = d.position_m - from(m.x0_m);
-  V3 dtheta = safety::rotation_vector(safety::normalized(d.orientation) *
-                                      safety::conjugate(safety::normalized(safety::quat_from(m.q0))));
+  const double h = std::isfinite(age_s) ? age_s : 0.0;
+  // The anchor h later: x0 moved on by vref, q0 turned on by wref (a world-frame rate: on the left).
+  V3 dx = d.position_m - from(m.x0_m) - h * from(m.vref_m_s);
+  const safety::Quat anchor = safety::quat_from_rotation_vector(h * from(m.wref_rad_s)) *
+                              safety::normalized(safety::quat_from(m.q0));
+  V3 dtheta = safety::rotation_vector(safety::normalized(d.orientation) * safety::conjugate(anchor));
+  // A non-finite anchor rate would be normalised away above: pass it on so the safety layer zeroes it.
+  if (!safety::finite(from(m.wref_rad_s))) dtheta = {NAN, NAN, NAN};
   V3 force = from(m.force_n) - k * dx + damping * (from(m.v0_m_s) - d.linear_velocity_m_s);
   V3 torque = from(m.torque_nm) - kr * dtheta + angular_damping * (from(m.w0_rad_s) - d.angular_velocity_rad_s);
   return {force, torque};

@@ -112,6 +112,7 @@ class RtLoop {
   void read_sim(std::uint64_t now_ns, std::uint32_t& loop_flags);
   void render_device(PerDevice& d, std::size_t index, std::uint64_t now_ns, bool new_sample);
   double sim_age_ms(std::uint64_t now_ns) const;
+  double pose_age_s(const shm::SimSample& sample, double cap_s) const;
   void publish(std::uint64_t tick, std::uint64_t scheduled_ns);
 
   config::Rig rig_;
@@ -130,6 +131,11 @@ class RtLoop {
   std::uint64_t sample_incarnation_ = 0;
   std::uint64_t last_new_sample_ns_ = 0;
   bool have_sample_ = false;
+  // When each recent tick polled its devices (slot tick % kPollTimes): the age of the device pose
+  // a sim sample was computed from, which the coupling's local model moves its anchor on by.
+  static constexpr std::uint64_t kPollTimes = 256;
+  std::uint64_t poll_ns_[kPollTimes] = {};
+  std::uint64_t current_tick_ = 0;
 
   std::atomic<SimAttachment*> sim_offer_{nullptr};
   std::atomic<std::uint64_t> sim_epoch_ack_{0};

@@ -7,14 +7,18 @@
 //   contacts rendered this way need damping b > K T / 2 (at 60 Hz ~17x more than at 1 kHz).
 //
 // coupling: the sim sends, with each sample, the local model of the virtual coupling at the pose
-//   it used: F0/tau0 at x0/q0 with twist v0/w0, stiffness K and damping D. The loop evaluates
-//     F   = F0   - K  (x - x0)            + D  (v0 - v)
-//     tau = tau0 - Kr rotvec(q q0^-1)     + Dr (w0 - w)
-//   against the current device pose every tick, so the spring is closed at 1 kHz where passivity
-//   needs it and a device step changes the wrench within one tick. (The stiffness term opposes
-//   the displacement: the spring pulls the hand back toward the pose the sim solved for.) K, Kr,
-//   D and Dr are capped by the rig's max closed-loop stiffness and damping; F0 still updates at
-//   the sim rate.
+//   it used: F0/tau0 at x0/q0 with twist v0/w0, stiffness K and damping D, and the twist
+//   vref/wref of the grasp the spring is anchored to. The loop evaluates
+//     F   = F0   - K  (x - x0 - vref h)                + D  (v0 - v)
+//     tau = tau0 - Kr rotvec(q (exp(wref h) q0)^-1)    + Dr (w0 - w)
+//   against the current device pose every tick, h the time since the device pose x0 was read,
+//   so the spring is closed at 1 kHz where passivity needs it and a device step changes the
+//   wrench within one tick. (The stiffness term opposes the displacement: the spring pulls the
+//   hand back toward the pose the sim solved for.) The anchor moves on with the grasp between
+//   samples: a hand carrying its body along at constant speed stretches the spring by nothing
+//   the sim did not, where a fixed anchor would add K v h, a drag that grows with the sample's
+//   age. K, Kr, D and Dr are capped by the rig's max closed-loop stiffness and damping; F0 still
+//   updates at the sim rate.
 #pragma once
 
 #include <cstdint>
@@ -58,10 +62,11 @@ struct CouplingCaps {
   double max_angular_damping_nm_s_per_rad;
 };
 
-// Evaluates the local coupling model against the device's current scene-frame pose and twist.
+// Evaluates the local coupling model against the device's current scene-frame pose and twist,
+// `age_s` after the device pose x0 (negative before it; the caller bounds it; non-finite: 0).
 // Negative K/D are treated as 0 (they would be active); K or Kr above its cap is reduced and
 // sets safety::flag_stiffness_capped in `flags`, D or Dr above its cap safety::flag_damping_capped.
 Wrench render_coupling(const shm::CouplingModel& model, const Twist6& device_scene, const CouplingCaps& caps,
-                       std::uint32_t& flags);
+                       double age_s, std::uint32_t& flags);
 
 }  // namespace hapfluid::rt

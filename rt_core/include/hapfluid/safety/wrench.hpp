@@ -54,6 +54,14 @@ inline V3 rotation_vector(Quat q) {
   return (angle / s) * axis;
 }
 
+// The unit quaternion of a rotation vector (axis * angle, rad): the inverse of rotation_vector.
+inline Quat quat_from_rotation_vector(V3 r) {
+  double angle = norm(r);
+  if (angle < 1e-12) return normalized({1.0, 0.5 * r.x, 0.5 * r.y, 0.5 * r.z});
+  double s = std::sin(0.5 * angle) / angle;
+  return {std::cos(0.5 * angle), s * r.x, s * r.y, s * r.z};
+}
+
 struct Wrench {
   V3 force_n;
   V3 torque_nm;

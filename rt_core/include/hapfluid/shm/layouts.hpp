@@ -17,7 +17,7 @@
 
 namespace hapfluid::shm {
 
-inline constexpr std::uint32_t kAbiVersion = 3;
+inline constexpr std::uint32_t kAbiVersion = 4;
 inline constexpr int kMaxDevices = 4;
 inline constexpr int kMaxBodies = 16;
 inline constexpr int kDeviceNameBytes = 32;
@@ -67,8 +67,12 @@ struct BodyState {
 
 // The local coupling model of one device (wrench_mode = coupling) and the wrench the sim computed
 // (both modes). All terms are the wrench ON THE HAND, scene frame, evaluated at the device pose
-// x0/q0 and twist v0/w0 the sim used for this step. haptic-rt renders at 1 kHz
-//   F = F0 - K (x - x0) + D (v0 - v),   tau = tau0 - Kr rotvec(q q0^-1) + Dr (w0 - w).
+// x0/q0 and twist v0/w0 the sim used for this step. The spring pulls toward the held body's
+// grasp, which moves on between samples: vref/wref is its twist (the couplings' grasp velocities,
+// weighted by their stiffness). haptic-rt renders at 1 kHz, h the time since the device pose x0
+// (SimSample::pose_lead_s after device_tick's poll; negative before it):
+//   F = F0 - K (x - x0 - vref h) + D (v0 - v),   tau = tau0 - Kr rotvec(q (exp(wref h) q0)^-1) + Dr (w0 - w),
+// so a hand moving with the body it holds feels what the sim computed, however old the sample.
 struct CouplingModel {
   std::uint32_t valid;             // 1: the sim couples this device this sample
   std::uint32_t reserved;
@@ -82,6 +86,8 @@ struct CouplingModel {
   double damping_n_s_per_m;        // D
   double angular_stiffness_nm_per_rad;
   double angular_damping_nm_s_per_rad;
+  double vref_m_s[3];              // the grasp's twist at the sample: where the spring's anchor goes
+  double wref_rad_s[3];
 };
 
 struct SimSample {
@@ -96,6 +102,9 @@ struct SimSample {
   char backend[16];
   std::uint32_t fluid_particles;
   std::uint32_t threads_active;
+  // The couplings' x0/q0 are the device poses this long after device_tick's poll: the sim couples
+  // a step at its end, so it moves the pose it read on by the step (v0 dt).
+  double pose_lead_s;
   BodyState bodies[kMaxBodies];
   CouplingModel couplings[kMaxDevices];
 };
@@ -168,7 +177,7 @@ template <class T>
 inline constexpr bool kPlainRecord = std::is_trivially_copyable_v<T> && std::is_standard_layout_v<T>;
 static_assert(kPlainRecord<DeviceStatesRecord> && kPlainRecord<SimSample> && kPlainRecord<ParticleFrameHeader> &&
               kPlainRecord<ParticleRecord> && kPlainRecord<TraceRecord>);
-static_assert(kAbiVersion == 3 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2496 &&
+static_assert(kAbiVersion == 4 && sizeof(DeviceStatesRecord) == 856 && sizeof(SimSample) == 2696 &&
                   sizeof(ParticleFrameHeader) == 936 && sizeof(ParticleRecord) == 16 && sizeof(TraceRecord) == 304,
               "shm layout changed: bump kAbiVersion and update these sizes");
 
