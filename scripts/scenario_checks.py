@@ -222,14 +222,16 @@ def crepe(run: Run) -> Verdict:
     return Verdict(kept, text, numbers)
 
 
-def spin_phase_torques_nm(run: Run) -> dict:
+def spin_phase_torques_nm(run: Run, felt: bool = False) -> dict:
     """Mean torque about the spin axis on the hand (its magnitude) while the glass speeds up (the
     start ramp), while it slows down (the stop ramp), and in the steady spin once the spin-up
-    has diffused through the fluid (STEADY_AFTER_S after the start ramp)."""
+    has diffused through the fluid (STEADY_AFTER_S after the start ramp). felt: what the device
+    applied (its log, the 1 kHz loop's rendering), else the sim's coupling torque."""
     spin = next(m for m in run.motions("hand") if m["kind"] == "spin")
     axis = np.array(spin["axis"], dtype=float) / np.linalg.norm(spin["axis"])
-    data = run.couplings("hand")
-    data["spin_axis_torque"] = axis[0] * data["tx"] + axis[1] * data["ty"] + axis[2] * data["tz"]
+    data = run.device_log("hand") if felt else run.couplings("hand")
+    prefix = "applied_t" if felt else "t"
+    data["spin_axis_torque"] = sum(axis[k] * data[prefix + c] for k, c in enumerate("xyz"))
     ramp = spin.get("ramp_s", 0.0)
     start, stop = spin["start_s"], spin["stop_s"]
     name = run.folder.name
@@ -291,7 +293,10 @@ def glass(runs: list[Run]) -> Verdict:
     a fixed window would decide the order of the hand's torques. In the steady spin the fluid
     turns with its glass as a rigid body: no shear, no torque. The hand's mean torque there stays
     below STEADY_FRACTION of its start ramp's; a fluid driven faster than its container (a
-    boundary term that is not zero for a rigid rotation) would keep the hand paying there."""
+    boundary term that is not zero for a rigid rotation) would keep the hand paying there. The
+    same holds for what the device applied in the live runs (their device logs, where a run has
+    them): a 1 kHz loop rendering the spring against a sample's stale anchor makes the hand pay
+    K w times the sample's age in the steady spin, though the sim asks for nothing."""
     viscosity = [float(r.scene["bodies"][0]["viscosity_pa_s"]) for r in runs]
     order = np.argsort(viscosity)
     viscosity = [viscosity[i] for i in order]
@@ -302,20 +307,30 @@ def glass(runs: list[Run]) -> Verdict:
     steady = [p["steady"] for p in phases]
     grows = all(b > a for a, b in zip(start, start[1:])) and all(b > a for a, b in zip(stop, stop[1:]))
     corotates = all(p["steady"] < STEADY_FRACTION * p["start"] for p in phases)
-    holds = grows and corotates
+    live = [Run(runs[i].folder) for i in order]  # the device logs are the live runs'
+    felt = [spin_phase_torques_nm(r, felt=True) for r in live if (r.folder / "device_hand.csv").exists()]
+    felt_corotates = all(p["steady"] < STEADY_FRACTION * p["start"] for p in felt)
+    holds = grows and corotates and felt_corotates
     pairs = ", ".join(f"{v:g} Pa·s {a * 1e4:.3f}/{b * 1e4:.3f}" for v, a, b in zip(viscosity, start, stop))
     hand = ", ".join(f"{p['start'] * 1e3:.2f}/{p['steady'] * 1e3:.3f}" for p in phases)
     text = (f"the fluid's added inertia in the start/stop ramps, 1e-4 kg·m²: {pairs}: "
             + ("grows" if grows else "does NOT grow") + " with the container's viscosity at start and stop; "
             + f"the hand's torque start/steady, mN·m: {hand}: "
             + (f"the steady spin costs < {STEADY_FRACTION:.0%} of the start" if corotates
-               else f"the steady spin keeps >= {STEADY_FRACTION:.0%} of the start's torque: the fluid does NOT co-rotate"))
+               else f"the steady spin keeps >= {STEADY_FRACTION:.0%} of the start's torque: the fluid does NOT co-rotate")
+            + ("" if not felt else "; the device applied start/steady, mN·m: "
+               + ", ".join(f"{p['start'] * 1e3:.2f}/{p['steady'] * 1e3:.3f}" for p in felt) + ": "
+               + ("the hand feels no steady drag" if felt_corotates
+                  else f"the hand feels >= {STEADY_FRACTION:.0%} of the start's torque in the steady spin, a drag "
+                       "the sim does NOT ask for")))
     numbers = {"viscosity_pa_s": viscosity, "fluid_start_inertia_kg_m2": [round(float(v), 9) for v in start],
                "fluid_stop_inertia_kg_m2": [round(float(v), 9) for v in stop],
                "ramp_s": [[round(float(f["start_ramp_s"]), 4), round(float(f["stop_ramp_s"]), 4)] for f in fluid],
                "start_torque_nm": [round(p["start"], 6) for p in phases],
                "stop_torque_nm": [round(p["stop"], 6) for p in phases],
-               "steady_torque_nm": [round(t, 6) for t in steady]}
+               "steady_torque_nm": [round(t, 6) for t in steady],
+               "felt_start_torque_nm": [round(p["start"], 6) for p in felt],
+               "felt_steady_torque_nm": [round(p["steady"], 6) for p in felt]}
     return Verdict(holds, text, numbers)
 
 

@@ -196,6 +196,28 @@ def test_glass_holds_when_the_fluids_share_grows_and_the_steady_spin_costs_nothi
     assert verdict.numbers["steady_torque_nm"][0] == pytest.approx(steady, rel=0.05)  # the steady spin's own window
 
 
+@pytest.mark.parametrize("felt_steady, holds", [(0.0002, True), (0.015, False)])
+def test_glass_fails_when_the_hand_feels_a_steady_drag_the_sim_does_not_ask_for(
+        checks, source_dir, tmp_path, felt_steady, holds):
+    # The device's log of each live run: 30 mN m in the ramps and felt_steady in the steady spin.
+    # 15 mN m is what a loop rendering the spring against a stale anchor gave (K w times the
+    # sample's age) while the sim asked for nothing.
+    def felt(t):
+        return -0.030 if 1.0 < t <= 1.15 else 0.030 if 3.85 < t <= 4.0 else -felt_steady if 1.15 < t < 3.85 else 0.0
+    log = [(t, 0.0, 0.0, felt(t)) for t in np.arange(-LEAD_IN_S, 6.0, 0.001)]
+    runs = []
+    for viscosity, torque, inertia in zip((2, 10, 20, 40), HAND, GROWING):
+        def spin(d, t, torque=torque):
+            return (0, 0, 0, 0, 0, -torque if 1.0 < t <= 1.15 else torque if 3.86 < t <= 4.0 else 0.0)
+        runs.append(make_run(tmp_path / f"glass_{viscosity}", source_dir, f"spinning_glass_{viscosity}", spin, 6.0, log))
+        write_glass_bodies(runs[-1], inertia, inertia)
+    verdict = checks.check("glass", runs)
+    assert verdict.holds is holds, verdict.text
+    assert ("the hand feels no steady drag" if holds else "the sim does NOT ask for") in verdict.text
+    assert verdict.numbers["felt_steady_torque_nm"] == pytest.approx([felt_steady] * 4, rel=0.01)
+    assert verdict.numbers["felt_start_torque_nm"] == pytest.approx([0.030] * 4, rel=0.01)
+
+
 def test_a_glass_that_never_stops_cannot_be_judged(checks, source_dir, tmp_path):
     runs = []
     for viscosity in (2, 10, 20, 40):
