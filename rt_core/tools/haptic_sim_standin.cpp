@@ -114,6 +114,7 @@ int main(int argc, char** argv) {
     sample->sequence = step;
     sample->sim_time_s = t;
     sample->device_tick = have_states ? states.tick : 0;
+    sample->pose_lead_s = pattern == "random" ? u(rng) : pattern == "huge" ? 1e300 : 0.0;
     sample->device_count = static_cast<std::uint32_t>(devices);
     for (int d = 0; d < devices; ++d) {
       shm::CouplingModel& m = sample->couplings[d];
@@ -122,8 +123,12 @@ int main(int argc, char** argv) {
       for (int i = 0; i < 3; ++i) {
         m.force_n[i] = scale * force[i];
         m.torque_nm[i] = scale * torque[i];
-        if (pattern == "huge") m.force_n[i] = 1e12 * (i + 1), m.torque_nm[i] = -1e9;
-        if (pattern == "random") m.force_n[i] = 1e3 * u(rng), m.torque_nm[i] = 10 * u(rng);
+        // The anchor's twist too: the loop moves the spring's anchor on by it between samples.
+        if (pattern == "huge")
+          m.force_n[i] = 1e12 * (i + 1), m.torque_nm[i] = -1e9, m.vref_m_s[i] = 1e12, m.wref_rad_s[i] = -1e9;
+        if (pattern == "random")
+          m.force_n[i] = 1e3 * u(rng), m.torque_nm[i] = 10 * u(rng), m.vref_m_s[i] = 1e3 * u(rng),
+          m.wref_rad_s[i] = 1e3 * u(rng);
         if (have_states) {
           m.x0_m[i] = states.devices[d].position_m[i];
           m.v0_m_s[i] = states.devices[d].linear_velocity_m_s[i];
@@ -131,9 +136,11 @@ int main(int argc, char** argv) {
         }
       }
       if (pattern == "nan") m.force_n[step % 3] = std::numeric_limits<double>::quiet_NaN();
+      if (pattern == "nan" && step % 2) (step % 4 == 1 ? m.vref_m_s : m.wref_rad_s)[step % 3] = std::numeric_limits<double>::infinity();
       for (int i = 0; i < 4; ++i) m.q0[i] = have_states ? states.devices[d].orientation[i] : (i == 0 ? 1.0 : 0.0);
       m.stiffness_n_per_m = stiffness;
       m.damping_n_s_per_m = damping;
+      if (pattern == "huge" || pattern == "random") m.angular_stiffness_nm_per_rad = 0.5 * stiffness;
     }
     bool stalled = stall_after_s >= 0 && t >= stall_after_s;
     if (!stalled) {
