@@ -85,9 +85,12 @@ TEST(LoopLocalModel, AHandCarryingItsBodyAlongFeelsTheSimsWrenchNotTheSamplesAge
   // anchor where the sample put it.
   std::uint64_t tick = 0;
   constexpr std::uint64_t kSimDelayTicks = 10;
-  auto publish = [&](double wref) {
+  double sim_time = 0;
+  auto publish = [&](double wref, double pace) {
     shm::SimSample s{};
     s.sequence = tick;
+    sim_time += pace * 0.005;  // one 5 ms sample period of wall time
+    s.sim_time_s = sim_time;
     s.publish_ns = shm::monotonic_ns();
     s.device_tick = tick - kSimDelayTicks;
     s.pose_lead_s = kLead;
@@ -103,13 +106,13 @@ TEST(LoopLocalModel, AHandCarryingItsBodyAlongFeelsTheSimsWrenchNotTheSamplesAge
   };
   // Paced at 1 kHz on the clock, as the loop runs: the sample's age is real time.
   std::uint64_t next = shm::monotonic_ns();
-  auto step = [&](double wref) {
+  auto step = [&](double wref, double pace = 1.0) {
     while (shm::monotonic_ns() < next) {
     }
     next += 1'000'000;
     loop.tick(next, shm::monotonic_ns());
     ++tick;
-    if (tick % 5 == 0 && tick > kSimDelayTicks) publish(wref);
+    if (tick % 5 == 0 && tick > kSimDelayTicks) publish(wref, pace);
     const std::uint32_t flags = loop.last_trace().devices[0].safety_flags;
     return handle->last.enable && loop.last_trace().devices[0].faults == 0 &&
            (flags & (safety::flag_waiting_to_engage | safety::flag_engaging | safety::flag_hard_zero)) == 0;
@@ -118,21 +121,30 @@ TEST(LoopLocalModel, AHandCarryingItsBodyAlongFeelsTheSimsWrenchNotTheSamplesAge
   int engaged_run = 0;
   for (int k = 0; k < 5000 && engaged_run < 20; ++k) engaged_run = step(kOmega) ? engaged_run + 1 : 0;
   ASSERT_EQ(engaged_run, 20) << "the loop never engaged the model";
-  auto mean_torque = [&](double wref) {
+  auto mean_torque = [&](double wref, double pace = 1.0) {
+    for (int k = 0; k < 100; ++k) step(wref, pace);  // the loop learns the sim's pace from 20 samples
     double sum = 0;
     for (int k = 0; k < 200; ++k) {
-      EXPECT_TRUE(step(wref)) << "tick " << tick << " not rendering the model";
+      EXPECT_TRUE(step(wref, pace)) << "tick " << tick << " not rendering the model";
       sum += handle->last.torque_nm[2];
     }
     return sum / 200;
   };
   const double moving = mean_torque(kOmega), held = mean_torque(0.0);
+  // A sim at a fifth of real time: its glass turns five times faster per simulated second than
+  // the hand per wall second (it sees the hand's poses at wall speed), and its samples' times
+  // advance 1 ms per 5 ms. The anchor must move at the hand's pace, not 5 w: that would turn
+  // the hand faster than it moves, a spring pushing it along.
+  const double slow = mean_torque(kOmega / 0.2, 0.2);
   // At a tick the pose x0 is 11-15 ms old, less its 5 ms lead: an anchor held still lags the
   // hand by 6-10 ms of turning, a spring pulling back by Kr w (age - lead), -10 mN m on average
-  // here, all of it the sample's age. The anchor moving with the glass is placed at the tick's
-  // own poll, so only the microseconds between the loop's poll and the handle reading its clock
-  // remain: Kr w 50 us = 63 uN m.
-  EXPECT_LT(std::abs(moving), kKr * kOmega * 50e-6) << "mean torque, anchor moving with the glass";
-  EXPECT_LT(held, -kKr * kOmega * 6e-3) << "mean torque, anchor held where the sample put it";
+  // here, all of it the sample's age. The anchor moving with the glass must remove nine tenths
+  // of the smallest such drag, Kr w 6 ms: what is left is the error of the pace the loop learns
+  // from the samples' publish times, which a preempted test thread (this one is not SCHED_FIFO)
+  // makes bursty. Quiet, it is below 0.1 uN m; beside two CPU hogs, up to 0.33 mN m.
+  const double drag = kKr * kOmega * 6e-3;
+  EXPECT_LT(held, -drag) << "mean torque, anchor held where the sample put it";
+  EXPECT_LT(std::abs(moving), 0.1 * drag) << "mean torque, anchor moving with the glass";
+  EXPECT_LT(std::abs(slow), 0.1 * drag) << "mean torque, anchor moving with a sim at 0.2x real time";
   sim.close();
 }

@@ -115,12 +115,32 @@ void RtLoop::read_sim(std::uint64_t now, std::uint32_t& loop_flags) {
       d->interpolator.reset();
       d->sim_restarted = true;
     }
+  track_sim_pace(scratch_, restarted || !have_sample_);
   sample_ = scratch_;
   sample_generation_ = generation;
   sample_incarnation_ = incarnation;
   last_new_sample_ns_ = now;
   have_sample_ = true;
   loop_flags |= loop_new_sim_sample;
+}
+
+void RtLoop::track_sim_pace(const shm::SimSample& next, bool first) {
+  // Simulated seconds per wall second of the sample stream: the simulated time between
+  // consecutive samples (sim_time_s) against the wall time between them (publish_ns), each
+  // averaged over ~4 samples before they are divided, so a burst of samples after a stall
+  // weighs no more than the stall, then clamped to [0, 1]. A sim slower than real time moves its
+  // bodies by their velocities in simulated time only: the anchor may move on at that pace,
+  // never faster. Until two samples are known: 0, a fixed anchor.
+  if (first) {
+    pace_sim_s_ = pace_wall_s_ = sim_pace_ = 0.0;
+    return;
+  }
+  const double sim_s = next.sim_time_s - sample_.sim_time_s;
+  const double wall_s = double(std::int64_t(next.publish_ns - sample_.publish_ns)) * 1e-9;
+  if (!std::isfinite(sim_s) || !(wall_s >= 0)) return;  // a sample from a broken clock says nothing
+  pace_sim_s_ = 0.75 * pace_sim_s_ + 0.25 * std::clamp(sim_s, 0.0, 1.0);
+  pace_wall_s_ = 0.75 * pace_wall_s_ + 0.25 * std::min(wall_s, 1.0);
+  sim_pace_ = pace_wall_s_ > 0 ? std::clamp(pace_sim_s_ / pace_wall_s_, 0.0, 1.0) : 0.0;
 }
 
 double RtLoop::sim_age_ms(std::uint64_t now) const {
@@ -162,7 +182,7 @@ void RtLoop::render_device(PerDevice& d, std::size_t index, std::uint64_t now, b
   } else if (coupled) {
     // Past the staleness limit the safety layer ramps the wrench out; the anchor stops there too.
     const double cap_s = d.safety.config().sim_stale_ms * 1e-3;
-    scene_command = render_coupling(model, scene, d.caps, pose_age_s(sample_, cap_s), capped);
+    scene_command = render_coupling(model, scene, d.caps, sim_pace_ * pose_age_s(sample_, cap_s), capped);
   }
 
   device::DeviceHealth health = d.device->health();

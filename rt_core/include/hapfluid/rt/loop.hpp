@@ -113,6 +113,7 @@ class RtLoop {
   void render_device(PerDevice& d, std::size_t index, std::uint64_t now_ns, bool new_sample);
   double sim_age_ms(std::uint64_t now_ns) const;
   double pose_age_s(const shm::SimSample& sample, double cap_s) const;
+  void track_sim_pace(const shm::SimSample& next, bool first);
   void publish(std::uint64_t tick, std::uint64_t scheduled_ns);
 
   config::Rig rig_;
@@ -136,6 +137,8 @@ class RtLoop {
   static constexpr std::uint64_t kPollTimes = 256;
   std::uint64_t poll_ns_[kPollTimes] = {};
   std::uint64_t current_tick_ = 0;
+  double sim_pace_ = 0.0;  // simulated seconds per wall second of the sample stream, at most 1
+  double pace_sim_s_ = 0.0, pace_wall_s_ = 0.0;  // averaged intervals between samples
 
   std::atomic<SimAttachment*> sim_offer_{nullptr};
   std::atomic<std::uint64_t> sim_epoch_ack_{0};

@@ -11,7 +11,9 @@
 //   vref/wref of the grasp the spring is anchored to. The loop evaluates
 //     F   = F0   - K  (x - x0 - vref h)                + D  (v0 - v)
 //     tau = tau0 - Kr rotvec(q (exp(wref h) q0)^-1)    + Dr (w0 - w)
-//   against the current device pose every tick, h the time since the device pose x0 was read,
+//   against the current device pose every tick, h the time since the device pose x0 was read
+//   (in simulated time: the loop scales it by the sim's pace, so a sim slower than real time
+//   does not drive the anchor ahead of its bodies),
 //   so the spring is closed at 1 kHz where passivity needs it and a device step changes the
 //   wrench within one tick. (The stiffness term opposes the displacement: the spring pulls the
 //   hand back toward the pose the sim solved for.) The anchor moves on with the grasp between
@@ -63,7 +65,8 @@ struct CouplingCaps {
 };
 
 // Evaluates the local coupling model against the device's current scene-frame pose and twist,
-// `age_s` after the device pose x0 (negative before it; the caller bounds it; non-finite: 0).
+// the anchor moved on for `age_s` of simulated time since the device pose x0 (negative before
+// it; the caller bounds it, and scales wall time by the sim's pace; non-finite: 0).
 // Negative K/D are treated as 0 (they would be active); K or Kr above its cap is reduced and
 // sets safety::flag_stiffness_capped in `flags`, D or Dr above its cap safety::flag_damping_capped.
 Wrench render_coupling(const shm::CouplingModel& model, const Twist6& device_scene, const CouplingCaps& caps,

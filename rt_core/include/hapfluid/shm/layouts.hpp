@@ -70,7 +70,8 @@ struct BodyState {
 // x0/q0 and twist v0/w0 the sim used for this step. The spring pulls toward the held body's
 // grasp, which moves on between samples: vref/wref is its twist (the couplings' grasp velocities,
 // weighted by their stiffness). haptic-rt renders at 1 kHz, h the time since the device pose x0
-// (SimSample::pose_lead_s after device_tick's poll; negative before it):
+// (SimSample::pose_lead_s after device_tick's poll; negative before it) times the sim's pace
+// (simulated seconds per wall second, measured from the samples, at most 1):
 //   F = F0 - K (x - x0 - vref h) + D (v0 - v),   tau = tau0 - Kr rotvec(q (exp(wref h) q0)^-1) + Dr (w0 - w),
 // so a hand moving with the body it holds feels what the sim computed, however old the sample.
 struct CouplingModel {
