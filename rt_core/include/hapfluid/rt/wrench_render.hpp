@@ -11,11 +11,10 @@
 //   vref/wref of the grasp the spring is anchored to. The loop evaluates
 //     F   = F0   - K  (x - x0 - vref h)                + D  (v0 - v)
 //     tau = tau0 - Kr rotvec(q (exp(wref h) q0)^-1)    + Dr (w0 - w)
-//   against the current device pose every tick, h the time since the device pose x0 was read
-//   (in simulated time: the loop scales it by the sim's pace, so a sim slower than real time
-//   does not drive the anchor ahead of its bodies),
-//   so the spring is closed at 1 kHz where passivity needs it and a device step changes the
-//   wrench within one tick. (The stiffness term opposes the displacement: the spring pulls the
+//   against the current device pose every tick, h being the time since the device pose x0 was
+//   read, in simulated time (the loop scales wall time by the sim's pace, so a sim slower than
+//   real time does not drive the anchor ahead of its bodies). The spring is thus closed at 1 kHz
+//   where passivity needs it, and a device step changes the wrench within one tick. (The stiffness term opposes the displacement: the spring pulls the
 //   hand back toward the pose the sim solved for.) The anchor moves on with the grasp between
 //   samples: a hand carrying its body along at constant speed stretches the spring by nothing
 //   the sim did not, where a fixed anchor would add K v h, a drag that grows with the sample's
