@@ -222,16 +222,25 @@ def crepe(run: Run) -> Verdict:
     return Verdict(kept, text, numbers)
 
 
+def spin_script(run: Run) -> tuple[dict, np.ndarray]:
+    """The hand's spin motion and its unit axis."""
+    spin = next(m for m in run.motions("hand") if m["kind"] == "spin")
+    return spin, np.array(spin["axis"], dtype=float) / np.linalg.norm(spin["axis"])
+
+
+def about(axis: np.ndarray, data: dict, prefix: str) -> np.ndarray:
+    """The component along `axis` of the columns prefix + x, y, z."""
+    return sum(axis[k] * data[prefix + c] for k, c in enumerate("xyz"))
+
+
 def spin_phase_torques_nm(run: Run, felt: bool = False) -> dict:
     """Mean torque about the spin axis on the hand (its magnitude) while the glass speeds up (the
     start ramp), while it slows down (the stop ramp), and in the steady spin once the spin-up
     has diffused through the fluid (STEADY_AFTER_S after the start ramp). felt: what the device
     applied (its log, the 1 kHz loop's rendering), else the sim's coupling torque."""
-    spin = next(m for m in run.motions("hand") if m["kind"] == "spin")
-    axis = np.array(spin["axis"], dtype=float) / np.linalg.norm(spin["axis"])
+    spin, axis = spin_script(run)
     data = run.device_log("hand") if felt else run.couplings("hand")
-    prefix = "applied_t" if felt else "t"
-    data["spin_axis_torque"] = sum(axis[k] * data[prefix + c] for k, c in enumerate("xyz"))
+    data["spin_axis_torque"] = about(axis, data, "applied_t" if felt else "t")
     ramp = spin.get("ramp_s", 0.0)
     start, stop = spin["start_s"], spin["stop_s"]
     name = run.folder.name
@@ -248,15 +257,13 @@ def fluid_inertia_in_ramps_kg_m2(run: Run) -> dict:
     the fluid's angular impulse on the glass about the spin axis over the glass's own ramp (from
     RAMP_EDGES[0] to RAMP_EDGES[1] of its speed change, linear between rows), divided by the
     glass's speed change over it, positive when the fluid resists the change. A fluid left at
-    rest adds nothing; one dragged along whole adds its own inertia. The ramp is found in the glass's own motion, in the sim's time, so how the
-    sim saw the hand's script (its latency, its steps) does not move the window; and the glass's
-    own inertia, 80 % of the torque the hand feels in a ramp, is left out."""
-    spin = next(m for m in run.motions("hand") if m["kind"] == "spin")
-    axis = np.array(spin["axis"], dtype=float) / np.linalg.norm(spin["axis"])
+    rest adds nothing; one dragged along whole adds its own inertia. The ramp is found in the
+    glass's own motion, in the sim's time, so how the sim saw the hand's script (its latency,
+    its steps) does not move the window; and the glass's own inertia, 80 % of the torque the
+    hand feels in a ramp, is left out."""
+    spin, axis = spin_script(run)
     body = run.body(next(c["body"] for c in run.scene["couplings"] if c["device"] == "hand"))
-    t = body["t"]
-    w = axis[0] * body["wx"] + axis[1] * body["wy"] + axis[2] * body["wz"]
-    torque = axis[0] * body["tx"] + axis[1] * body["ty"] + axis[2] * body["tz"]
+    t, w, torque = body["t"], about(axis, body, "w"), about(axis, body, "t")
     impulse = np.concatenate([[0.0], np.cumsum(0.5 * (torque[1:] + torque[:-1]) * np.diff(t))])
     speed = float(spin["angular_speed_rad_s"])
 

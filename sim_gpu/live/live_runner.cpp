@@ -506,8 +506,7 @@ int run_live(const LiveOptions& o) {
           // with x_grasp moving on at the grasp's velocity until the next sample.
           f = f + vc.device_force, t = t + vc.device_torque;
           const RigidBody& body = m.bodies[vc.body];
-          const Vec3 grasp = body.position + body.rotation() * (vc.grasp_position - body.com_in_mesh_frame);
-          k_v = k_v + body.velocity_at(grasp) * vc.linear_stiffness_n_per_m;
+          k_v = k_v + body.velocity_at(grasp_in_world(body, vc)) * vc.linear_stiffness_n_per_m;
           kr_w = kr_w + body.angular_velocity * vc.angular_stiffness_nm_per_rad;
           cm.stiffness_n_per_m += vc.linear_stiffness_n_per_m;
           cm.damping_n_s_per_m += vc.linear_damping_n_s_per_m;

@@ -33,6 +33,10 @@ DeviceState device_state_after(DeviceState s, double dt) {
   return s;
 }
 
+Vec3 grasp_in_world(const RigidBody& body, const VirtualCoupling& c) {
+  return body.position + body.rotation() * (c.grasp_position - body.com_in_mesh_frame);
+}
+
 namespace {
 
 // Cross-product matrix [r]x, so that [r]x w = r x w.
@@ -51,7 +55,7 @@ struct CouplingTerms {
 };
 
 CouplingTerms coupling_terms(const RigidBody& body, const VirtualCoupling& c, const DeviceState& d) {
-  const Vec3 grasp_world = body.position + body.rotation() * (c.grasp_position - body.com_in_mesh_frame);
+  const Vec3 grasp_world = grasp_in_world(body, c);
   const Quat grasp_orientation = normalized(body.orientation * c.grasp_orientation);
   return {grasp_world - body.position, d.position - grasp_world,
           rotation_vector(d.orientation * conjugate(grasp_orientation))};

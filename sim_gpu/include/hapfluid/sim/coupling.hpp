@@ -43,6 +43,9 @@ struct VirtualCoupling {
   Vec3 device_force, device_torque;
 };
 
+// Where the coupling holds its body, in the world, at the body's current pose.
+Vec3 grasp_in_world(const RigidBody& body, const VirtualCoupling& c);
+
 // The body's implicit step as a 6x6 system A u = rhs for u = (v, w) at t + dt/2 (Algorithm 2,
 // lines 6-7): A is the mass matrix plus each coupling's dt (b + dt k) J^T J; rhs is the
 // momentum plus dt times the external force and torque summed into the body, gravity and the
