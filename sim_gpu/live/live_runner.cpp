@@ -186,6 +186,7 @@ std::string stats_json(const LiveOptions& o, const LiveBackend& backend, const C
   j["longest_step_wall_s"] = c.step_wall_max_s;
   // The share of the wall clock the steps took: the sim's headroom is what is left of 1.
   j["step_load"] = c.step_wall_total_s / wall;
+  add_solver_work(j, solver);
   j["sim_samples_published"] = c.samples;
   j["particle_frames_published"] = c.particle_frames;
   j["vtk_export_every_s"] = o.export_every_s;

@@ -36,4 +36,24 @@ StatsJson batch_stats(const RunRecord& run, const std::string& backend) {
   return j;
 }
 
+void add_solver_work(StatsJson& j, const Solver& solver) {
+  const PhaseTimes t = solver.phase_times();
+  const SolverIterations it = solver.iterations();
+  const double steps = static_cast<double>(solver.steps());
+  auto per_step = [&](double n) { return steps > 0 ? n / steps : 0.0; };
+  j["solver_iterations"] = {{"density_per_step", per_step(static_cast<double>(it.density_iterations))},
+                            {"divergence_per_step", per_step(static_cast<double>(it.divergence_iterations))},
+                            {"viscosity_per_step", per_step(static_cast<double>(it.viscosity_iterations))},
+                            {"explicit_viscosity_steps", it.explicit_viscosity_steps},
+                            {"unconverged_solves", it.unconverged_solves},
+                            {"budget_overruns", it.budget_overruns},
+                            {"max_mean_density_error", it.max_density_error}};
+  j["phase_ms_per_step"] = {{"neighbour_search", per_step_ms(t.neighbour_search_s, steps)},
+                            {"density", per_step_ms(t.density_s, steps)},
+                            {"forces", per_step_ms(t.forces_s, steps)},
+                            {"pressure_solve", per_step_ms(t.pressure_s, steps)},
+                            {"bodies", per_step_ms(t.bodies_s, steps)},
+                            {"integration", per_step_ms(t.integration_s, steps)}};
+}
+
 }  // namespace hapfluid::sim

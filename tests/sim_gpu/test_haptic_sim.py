@@ -444,6 +444,9 @@ def test_the_live_sim_reports_how_many_threads_it_stepped_with(binary, tmp_path)
         choice = stats["thread_choice"]
         assert choice["steps_with_all"] + choice["steps_with_one"] == stats["steps"] > 0
         assert choice["chosen"] in (1, int(threads))
+        # What the steps did, as a batch run's stats.json says it: a live run is diagnosed the same way.
+        assert stats["phase_ms_per_step"]["neighbour_search"] > 0, stats
+        assert set(stats["solver_iterations"]) >= {"density_per_step", "unconverged_solves"}, stats
         status = [l for l in result.stderr.splitlines() if l.startswith("haptic-sim: t = ")]
         assert status and all(" thread(s), " in l for l in status), result.stderr
         if threads == "1":

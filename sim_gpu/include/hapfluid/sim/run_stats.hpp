@@ -32,6 +32,10 @@ struct RunRecord {
 // (phase_ms_per_step), since the backends time different phases.
 StatsJson batch_stats(const RunRecord& run, const std::string& backend);
 
+// Adds what the solver's steps did, batch or live: "solver_iterations" (per step, and the
+// solves that did not converge) and "phase_ms_per_step" (the backend's own phase timers).
+void add_solver_work(StatsJson& j, const Solver& solver);
+
 // Milliseconds per step of a phase's total seconds over `steps` (0 before the first step).
 double per_step_ms(double total_s, double steps);
 
