@@ -53,6 +53,12 @@ void BodySolveCoupling::init(const SimulationModel& m, int slots) {
   slot_force_.assign(6 * bodies_ * slots, 0.0);
   slot_response_.assign(36 * bodies_ * slots, 0.0);
   slot_j_.assign(6 * bodies_ * slots, 0.0);
+  // Room for every particle of a slot next to two bodies at once: a step allocates only where
+  // more than that meet in one slot.
+  const std::size_t dynamic_bodies = static_cast<std::size_t>(std::count(dynamic_.begin(), dynamic_.end(), 1));
+  slot_jacobians_.assign(static_cast<std::size_t>(slots), {});
+  if (active_)
+    for (auto& j : slot_jacobians_) j.reserve((m.fluid.size() / static_cast<std::size_t>(slots) + 1) * std::min<std::size_t>(dynamic_bodies, 2));
 }
 
 void BodySolveCoupling::begin_step(const SimulationModel& m,
@@ -71,6 +77,8 @@ void BodySolveCoupling::begin_step(const SimulationModel& m,
     const PairLists& l = lists[w];
     double* j6 = slot_j_.data() + 6 * bodies_ * w;
     double* s36 = slot_response_.data() + 36 * bodies_ * w;
+    std::vector<ParticleJacobian>& jacobians = slot_jacobians_[static_cast<std::size_t>(w)];
+    jacobians.clear();
     for (std::size_t i = begin; i < end; ++i) {
       const PairRange& r = ranges[i];
       if (r.bodies == 0) continue;
@@ -88,6 +96,9 @@ void BodySolveCoupling::begin_step(const SimulationModel& m,
         double* s = s36 + 36 * b;
         for (int a = 0; a < 6; ++a)
           for (int c = 0; c < 6; ++c) s[6 * a + c] += factor * j[a] * j[c];
+        ParticleJacobian& e = jacobians.emplace_back();
+        e.particle = static_cast<std::uint32_t>(i), e.body = static_cast<std::uint32_t>(b);
+        std::copy(j, j + 6, e.j);
         std::fill(j, j + 6, 0.0);
       }
     }
@@ -127,24 +138,27 @@ void BodySolveCoupling::start_solve_from_body_states(const SimulationModel& m) {
   std::fill(slot_force_.begin(), slot_force_.end(), 0.0);
 }
 
-void BodySolveCoupling::add_forces(int slot, const SortedSolids& bodies, const PairLists& lists,
-                                   const PairRange* ranges, std::size_t begin, std::size_t end, const float* k) {
-  double* acc = slot_force_.data() + 6 * bodies_ * slot;
-  for (std::size_t i = begin; i < end; ++i) {
-    const PairRange& r = ranges[i];
-    if (r.bodies == 0 || k[i] == 0) continue;
-    const double mk = static_cast<double>(particle_mass_) * k[i];
-    const std::uint32_t first = r.offset + r.fluid + r.statics, last = first + r.bodies;
-    for (std::uint32_t q = first; q < last; ++q) {
-      const std::uint32_t p = lists.index[q];
-      const std::size_t b = static_cast<std::size_t>(bodies.body[p]);
-      const Packed4& g = lists.term[q];
-      add_wrench(acc + 6 * b, bodies, p, &com_[3 * b], mk * g.x, mk * g.y, mk * g.z);
-    }
+void BodySolveCoupling::add_forces(int slot, const float* k) {
+  double* acc = slot_force_.data() + 6 * bodies_ * static_cast<std::size_t>(slot);
+  for (const ParticleJacobian& e : slot_jacobians_[static_cast<std::size_t>(slot)]) {
+    const float ki = k[e.particle];
+    if (ki == 0) continue;
+    const double mk = static_cast<double>(particle_mass_) * ki;
+    double* a = acc + 6 * static_cast<std::size_t>(e.body);
+    for (int c = 0; c < 6; ++c) a[c] += mk * e.j[c];
   }
 }
 
-void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodies) {
+void BodySolveCoupling::subtract_flux(int slot, float* rate) const {
+  for (const ParticleJacobian& e : slot_jacobians_[static_cast<std::size_t>(slot)]) {
+    const Vec6& u = u_[e.body];
+    double flux = 0;
+    for (int c = 0; c < 6; ++c) flux += e.j[c] * u[c];
+    rate[e.particle] -= static_cast<float>(flux);
+  }
+}
+
+void BodySolveCoupling::update_velocities() {
   for (std::size_t b = 0; b < bodies_; ++b) {
     if (!dynamic_[b]) continue;
     for (int w = 0; w < slots_; ++w) {
@@ -157,8 +171,10 @@ void BodySolveCoupling::update_velocities(SimulationModel& m, SortedSolids& bodi
     const Vec6 step = times(relax_[b], gap);
     for (int k = 0; k < 6; ++k) u_[b][k] += step[k];
   }
-  // On the calling thread: a few flops per body particle, less than a hand-off to the pool costs
-  // (this runs at every iteration of both solves).
+}
+
+void BodySolveCoupling::write_particle_velocities(SimulationModel& m, SortedSolids& bodies) const {
+  // On the calling thread: a few flops per body particle, less than a hand-off to the pool costs.
   BodyParticles& bp = m.body_particles;
   for (std::size_t p = 0; p < bodies.size(); ++p) {
     const std::size_t b = static_cast<std::size_t>(bodies.body[p]);

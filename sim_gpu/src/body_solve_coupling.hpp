@@ -12,7 +12,8 @@
 // the fluid's Jacobi response to the body's own motion (J_i: particle i's pair gradients with the
 // body as a 6-vector, force and torque). The fixed point is the body's own step, so a converged
 // solve leaves fluid and body consistent, and the body step afterwards (step_bodies) integrates
-// the same forces. Internal to sim_gpu.
+// the same forces. J_i is kept for the step: each iteration's force on a body is m k_i J_i and
+// the body's flux into particle i's density rate J_i . u. Internal to sim_gpu.
 #pragma once
 
 #include <array>
@@ -49,14 +50,24 @@ class BodySolveCoupling {
   // The same from every dynamic body's velocity now (the start of the step).
   void start_solve_from_body_states(const SimulationModel& m);
 
-  // Inside a slot's pass over the fluid [begin, end): the force the stiffness increments k of
-  // these particles put on the bodies, m k_i Psi_b grad W_ib per pair, summed per slot.
-  void add_forces(int slot, const SortedSolids& bodies, const PairLists& lists, const PairRange* ranges,
-                  std::size_t begin, std::size_t end, const float* k);
+  // Inside a slot's pass over the fluid (the slot's particles of begin_step): the force the
+  // stiffness increments k of these particles put on the bodies, m k_i Psi_b grad W_ib per pair,
+  // summed per slot. Per particle and body that is m k_i J_i, with J_i kept from begin_step: six
+  // products per particle next to a body rather than a wrench per pair.
+  void add_forces(int slot, const float* k);
 
-  // After the increments are applied: the bodies' new predicted velocities, written to the
-  // cell-sorted view (which the density rates read) and to the grouped body particles.
-  void update_velocities(SimulationModel& m, SortedSolids& bodies);
+  // The bodies' share of the density rates of the slot's particles (those of begin_step),
+  // subtracted from `rate`: sum_b J_ib . u_b, the pairs' sum_j Psi_j grad W_ij . v_j for the
+  // rigid velocities v_j of the bodies' current prediction u_b, six products per particle next
+  // to a body rather than three per pair.
+  void subtract_flux(int slot, float* rate) const;
+
+  // After the increments are applied: the bodies' new predicted velocities u, which the next
+  // density rates read (subtract_flux).
+  void update_velocities();
+  // The prediction's rigid velocities onto the body particles, in the cell-sorted view and the
+  // grouped body particles, for what reads them after a solve (viscosity, contacts, body step).
+  void write_particle_velocities(SimulationModel& m, SortedSolids& bodies) const;
 
   // The force and torque (about the centre of mass) the current solve has put on the body.
   Vec6 solve_force(std::size_t body) const { return force_[body]; }
@@ -74,6 +85,12 @@ class BodySolveCoupling {
   std::vector<double> slot_force_;   // 6 per body per slot
   std::vector<double> slot_response_;  // 36 per body per slot: sum factor J J^T
   std::vector<double> slot_j_;       // 6 per body per slot, one particle's J
+  // J_i of every fluid particle next to a body, per slot, this step (capacity kept across steps).
+  struct ParticleJacobian {
+    std::uint32_t particle, body;
+    double j[6];
+  };
+  std::vector<std::vector<ParticleJacobian>> slot_jacobians_;
 };
 
 }  // namespace hapfluid::sim::detail

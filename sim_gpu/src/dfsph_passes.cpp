@@ -150,7 +150,7 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
 
 HAPFLUID_CLONES
 void density_rate(const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                  std::size_t begin, std::size_t end, float* rate) {
+                  std::size_t begin, std::size_t end, float* rate, bool body_pairs) {
   const Packed4* v = d.velocity.data();
   const float *bx = bodies.vx.data(), *by = bodies.vy.data(), *bz = bodies.vz.data();
   const std::uint32_t* list = lists.index.data();
@@ -163,7 +163,8 @@ void density_rate(const SortedSolids& bodies, const DfsphFields& d, const PairLi
     for (std::uint32_t q = o; q < o + n; ++q) s += load(term[q]) * (vi - load(v[list[q]]));
     // The body particles' flux, from their velocities now: a solve coupled to the bodies moves them.
     float flux = 0;
-    for (std::uint32_t q = o + n + r.statics; q < o + n + r.statics + r.bodies; ++q) {
+    const std::uint32_t body_end = body_pairs ? o + n + r.statics + r.bodies : 0;
+    for (std::uint32_t q = o + n + r.statics; q < body_end; ++q) {
       const std::uint32_t j = list[q];
       flux += term[q].x * bx[j] + term[q].y * by[j] + term[q].z * bz[j];
     }

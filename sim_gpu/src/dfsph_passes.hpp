@@ -21,9 +21,11 @@ void build_pairs(const SimulationParams& p, const FluidParticles& f, const std::
 
 // rate[i] = D(rho/rho0)/Dt = sum_j V_j grad W_ij . (v_i - v_j) over fluid and solid neighbours,
 // 1/s; the dynamic bodies' particles with their velocities in `bodies` (static solids are at rest).
-// The fluid's velocities are d.velocity (packed for the solve).
+// The fluid's velocities are d.velocity (packed for the solve). With body_pairs false the
+// dynamic bodies' share is left out, for the caller to subtract per body from their rigid
+// velocities (BodySolveCoupling::subtract_flux, inside the coupled solves).
 void density_rate(const SortedSolids& bodies, const DfsphFields& d, const PairLists& lists, const PairRange* ranges,
-                  std::size_t begin, std::size_t end, float* rate);
+                  std::size_t begin, std::size_t end, float* rate, bool body_pairs = true);
 
 // v_i -= dt (sum_fluid (k_i + k_j) V_j grad W_ij + k_i sum_solids Psi_b grad W_ib), k = the
 // stiffness increments of this iteration.

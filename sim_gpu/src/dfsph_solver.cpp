@@ -159,8 +159,13 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
     for (std::size_t i = b; i < e; ++i) velocity[i] = {f.vx[i], f.vy[i], f.vz[i], 0.0f};
   });
+  // Coupled, the bodies' share of the rates comes from their rigid velocities (subtract_flux).
+  auto rates = [&](std::size_t b, std::size_t e, int w) {
+    detail::density_rate(body_view_, fields_, lists_[w], ranges_.data(), b, e, step, !coupled_);
+    if (coupled_) coupling_->subtract_flux(w, step);
+  };
   pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-    detail::density_rate(body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
+    rates(b, e, w);
     for (std::size_t i = b; i < e; ++i) {
       const float k = rate(i, step[i]) > 0 ? kWarmStartFraction * warm[i] * warm_scale : 0.0f;
       step[i] = k;
@@ -170,16 +175,16 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
   auto apply = [&] {
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
       detail::apply_stiffness(fields_, lists_[w], ranges_.data(), b, e, dt);
-      if (coupled_) coupling_->add_forces(w, body_view_, lists_[w], ranges_.data(), b, e, step);
+      if (coupled_) coupling_->add_forces(w, step);
     });
-    if (coupled_) coupling_->update_velocities(m_, body_view_);
+    if (coupled_) coupling_->update_velocities();
   };
   apply();
   int it = 0;
   double mean_error = 0;
   for (; it < ip.max_iterations; ++it) {
     pool_.parallel_for(n, [&](std::size_t b, std::size_t e, int w) {
-      detail::density_rate(body_view_, fields_, lists_[w], ranges_.data(), b, e, step);
+      rates(b, e, w);
       double sum = 0;
       for (std::size_t i = b; i < e; ++i) {
         const float error = rate(i, step[i]);
@@ -205,6 +210,7 @@ int DfsphSolver::solve(float dt, bool density, float tolerance, Rate&& rate) {
       f.vx[i] = velocity[i].x, f.vy[i] = velocity[i].y, f.vz[i] = velocity[i].z;
     }
   });
+  if (coupled_) coupling_->write_particle_velocities(m_, body_view_);
   if (it >= ip.max_iterations) ++iterations_.unconverged_solves;
   if (density) {
     iterations_.last_density_error = mean_error;
@@ -434,7 +440,8 @@ void DfsphSolver::start_density_coupling(double dt) {
     solve6(sys.a, sys.rhs, u.data());
     coupling_->start_solve(b, u);
   }
-  coupling_->update_velocities(m_, body_view_);
+  coupling_->update_velocities();
+  coupling_->write_particle_velocities(m_, body_view_);
 }
 
 void DfsphSolver::body_forces_and_step(double dt) {
