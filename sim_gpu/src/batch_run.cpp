@@ -18,9 +18,8 @@ namespace {
 
 std::string stats_json(const Solver& solver, const BatchOptions& o, const BatchResult& r, double dt_min, double dt_max,
                        const std::string& error, const ExtraStats& extra) {
-  StatsJson j = batch_stats({&solver.model(), &o, &r, dt_min, dt_max, solver.phase_times(),
-                             solver.clamped_particle_count(), error},
-                           solver.backend());
+  StatsJson j =
+      batch_stats({&solver.model(), &o, &r, dt_min, dt_max, solver.clamped_particle_count(), error}, solver.backend());
   j["solver"] = solver.method();
   j["threads"] = solver.threads();
   add_solver_work(j, solver);

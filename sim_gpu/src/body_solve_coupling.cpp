@@ -58,7 +58,8 @@ void BodySolveCoupling::init(const SimulationModel& m, int slots) {
   const std::size_t dynamic_bodies = static_cast<std::size_t>(std::count(dynamic_.begin(), dynamic_.end(), 1));
   slot_jacobians_.assign(static_cast<std::size_t>(slots), {});
   if (active_)
-    for (auto& j : slot_jacobians_) j.reserve((m.fluid.size() / static_cast<std::size_t>(slots) + 1) * std::min<std::size_t>(dynamic_bodies, 2));
+    for (auto& j : slot_jacobians_)
+      j.reserve((m.fluid.size() / static_cast<std::size_t>(slots) + 1) * std::min<std::size_t>(dynamic_bodies, 2));
 }
 
 void BodySolveCoupling::begin_step(const SimulationModel& m,

@@ -21,15 +21,14 @@ struct RunRecord {
   const BatchOptions* options = nullptr;
   const BatchResult* result = nullptr;
   double dt_min_s = 0, dt_max_s = 0;
-  PhaseTimes phases;
   std::uint64_t clamped_particle_events = 0;
   std::string error;  // empty: the run completed
 };
 
 // {"complete", ["error"], "build_id", "scene", "backend", "particles", "steps", "dt_s",
 //  "simulated_time_s", "wall_time_s", "steps_per_s", "particle_steps_per_s", "real_time_factor",
-//  "frames_exported", "clamped_particle_events"}; phase times are the backend's to add
-// (phase_ms_per_step), since the backends time different phases.
+//  "frames_exported", "clamped_particle_events"}; the solver's own work is added by
+// add_solver_work.
 StatsJson batch_stats(const RunRecord& run, const std::string& backend);
 
 // Adds what the solver's steps did, batch or live: "solver_iterations" (per step, and the
