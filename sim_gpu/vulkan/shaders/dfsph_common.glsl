@@ -11,18 +11,20 @@ layout(local_size_x = 64) in;
 layout(std430, binding = BINDING_D_SOLVE) buffer Solve { uint solve[]; };
 layout(binding = BINDING_T_D_WALLS) uniform samplerBuffer t_walls;
 
-// The solver's per-particle fields (D_PARTICLE), 12 vec4 per cell-sorted particle k:
-#define D_FIELD(k) dp[12u * (k)]       // rho / rho0, DFSPH factor (m^2), neighbours, fluid neighbours
-#define D_SOLID(k) dp[12u * (k) + 1u]  // sum over static solids and walls of V grad W (1/m), 0
-#define D_STIFF(k) dp[12u * (k) + 2u]  // this iteration's stiffness, density total, divergence total (m^2/s^2), 0
-#define D_WARM_S(k) dp[12u * (k) + 3u] // warm starts: density k dt^2, divergence k dt, 0, 0
-#define D_DV_S(k) dp[12u * (k) + 4u]   // the last viscosity solve's velocity change, 0
+// The solver's per-particle fields (D_PARTICLE), 12 vec4 per cell-sorted particle k, field m at
+// m N + k (N the fluid count): neighbouring invocations read neighbouring entries.
+#define D_AT(k, m) dp[(m) * P.counts.x + (k)]
+#define D_FIELD(k) D_AT(k, 0u)   // rho / rho0, DFSPH factor (m^2), neighbours, fluid neighbours
+#define D_SOLID(k) D_AT(k, 1u)   // sum over static solids and walls of V grad W (1/m), 0
+#define D_STIFF(k) D_AT(k, 2u)   // this iteration's stiffness, density total, divergence total (m^2/s^2), 0
+#define D_WARM_S(k) D_AT(k, 3u)  // warm starts: density k dt^2, divergence k dt, 0, 0
+#define D_DV_S(k) D_AT(k, 4u)    // the last viscosity solve's velocity change, 0
 // The viscosity solve: 0 b, 1 inverse diagonal, 2 r, 3 p, 4 A p (or z), 5 the walls' diagonal,
 // 6 the start velocity.
-#define D_VISC(k, m) dp[12u * (k) + 5u + (m)]
-// Then the warm starts in the persistent (F) order, 2 vec4 per particle i, as D_WARM_S, D_DV_S.
-#define D_WARM_F(i) dp[12u * P.counts.x + 2u * (i)]
-#define D_DV_F(i) dp[12u * P.counts.x + 2u * (i) + 1u]
+#define D_VISC(k, m) D_AT(k, 5u + (m))
+// Then the warm starts in the persistent (F) order, as D_WARM_S and D_DV_S, at fields 12 and 13.
+#define D_WARM_F(i) D_AT(i, 12u)
+#define D_DV_F(i) D_AT(i, 13u)
 layout(std430, binding = BINDING_D_PARTICLE) buffer DParticle { vec4 dp[]; };
 float walls(int i) { return texelFetch(t_walls, i).x; }
 // Neighbours' fields are read through texel views (T_S_VEL, T_D_PARTICLE): on lavapipe a texel
@@ -32,8 +34,8 @@ layout(binding = BINDING_T_S_VEL) uniform samplerBuffer t_vel;
 // The stiffness increments again, packed (D_KAPPA): the pass that applies them reads one float
 // per neighbour from a small array instead of one vec4 from the 12 of its fields.
 layout(binding = BINDING_T_D_KAPPA) uniform samplerBuffer t_kappa;
-#define T_FIELD(j) texelFetch(t_dp, int(12u * (j)))
-#define T_VISC(j, m) texelFetch(t_dp, int(12u * (j) + 5u + (m)))
+#define T_FIELD(j) texelFetch(t_dp, int(j))
+#define T_VISC(j, m) texelFetch(t_dp, int((5u + (m)) * P.counts.x + (j)))
 
 // Each particle's fluid neighbours, listed by the density pass in the CPU's neighbour order, and
 // read by every later pass of the step instead of the 27 cells' candidates: per pair one vec4,
@@ -42,8 +44,11 @@ layout(binding = BINDING_T_D_KAPPA) uniform samplerBuffer t_kappa;
 layout(binding = BINDING_T_D_LIST) uniform samplerBuffer t_list;
 uint list_capacity() { return uint(P.dfsph_d.x); }
 // for (...) { LISTED_PAIR; ... LISTED_INDEX ... LISTED_GRADIENT ... } over particle k's list.
+// Slot n of particle k's list is entry n N + k (N the fluid count): neighbouring invocations read
+// neighbouring entries at every step of their loops.
+uint listed_at(uint k, uint n) { return n * P.counts.x + k; }
 #define FOR_EACH_LISTED(k) \
-  for (uint q_ = (k) * list_capacity(), e_ = q_ + min(uint(D_FIELD(k).w), list_capacity()); q_ < e_; ++q_)
+  for (uint q_ = (k), e_ = q_ + min(uint(D_FIELD(k).w), list_capacity()) * P.counts.x; q_ < e_; q_ += P.counts.x)
 #define LISTED_PAIR vec4 listed_ = texelFetch(t_list, int(q_))
 #define LISTED_INDEX uint(listed_.w)
 #define LISTED_GRADIENT listed_.xyz

@@ -28,7 +28,7 @@ void main() {
           vec4 t = pair_term(d, volume);
           sf += t;
           g2 += dot(t.xyz, t.xyz);
-          if (n < cap) list[k * cap + n] = vec4(t.xyz, float(j));
+          if (n < cap) list[listed_at(k, n)] = vec4(t.xyz, float(j));
           ++n;
         }
       }

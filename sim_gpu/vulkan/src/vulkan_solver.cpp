@@ -401,12 +401,13 @@ void VulkanSolver::upload_model() {
   b.s_density.upload(pack4(nf, f.density.data(), f.pressure.data(), f.volume.data(), f.volume_correction.data()).data(),
                      16 * nf);
   if (dfsph_) {
-    // The solver's per-particle memory in F order, after the sorted fields (dfsph_common.glsl):
-    // warm starts of both solves, the last viscous change.
+    // The solver's per-particle memory in F order, fields 12 and 13 after the sorted ones
+    // (dfsph_common.glsl): warm starts of both solves, the last viscous change.
     std::vector<float> warm(8 * nf, 0.0f);
     for (std::size_t i = 0; i < nf; ++i) {
-      warm[8 * i] = f.density_stiffness_dt2[i], warm[8 * i + 1] = f.divergence_stiffness_dt[i];
-      warm[8 * i + 4] = f.viscous_dvx[i], warm[8 * i + 5] = f.viscous_dvy[i], warm[8 * i + 6] = f.viscous_dvz[i];
+      warm[4 * i] = f.density_stiffness_dt2[i], warm[4 * i + 1] = f.divergence_stiffness_dt[i];
+      float* dv = &warm[4 * (nf + i)];
+      dv[0] = f.viscous_dvx[i], dv[1] = f.viscous_dvy[i], dv[2] = f.viscous_dvz[i];
     }
     b.d_particle.upload(warm.data(), 4 * warm.size(), 16 * 12 * nf);
     const std::vector<std::uint32_t> state(b.d_solve.size() / 4, 0);
