@@ -14,7 +14,18 @@ std::string fmt(double v) {
   return buf;
 }
 
-std::string fmt(double x, double y, double z) { return "(" + fmt(x) + ", " + fmt(y) + ", " + fmt(z) + ")"; }
+// Whole strings from snprintf: GCC 12 warns falsely (-Wrestrict) on "(" + std::string.
+std::string fmt(double x, double y, double z) {
+  char buf[96];
+  std::snprintf(buf, sizeof buf, "(%g, %g, %g)", x, y, z);
+  return buf;
+}
+
+std::string fmt(const Quat& q) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "[%g, %g, %g, %g]", q.w, q.x, q.y, q.z);
+  return buf;
+}
 
 bool finite3(double x, double y, double z) { return std::isfinite(x) && std::isfinite(y) && std::isfinite(z); }
 
@@ -50,7 +61,7 @@ void check_finite_state(const SimulationModel& m, double time_s) {
     const Quat& q = b.orientation;
     if (!finite(b.position)) diverged(time_s, what, "position", fmt(b.position.x, b.position.y, b.position.z) + " m", body_fix);
     if (!std::isfinite(q.w) || !finite3(q.x, q.y, q.z))
-      diverged(time_s, what, "orientation", "[" + fmt(q.w) + ", " + fmt(q.x) + ", " + fmt(q.y) + ", " + fmt(q.z) + "]",
+      diverged(time_s, what, "orientation", fmt(q),
                body_fix);
     const Vec3 &v = b.linear_velocity, &w = b.angular_velocity;
     if (!finite(v)) diverged(time_s, what, "velocity", fmt(v.x, v.y, v.z) + " m/s", body_fix);

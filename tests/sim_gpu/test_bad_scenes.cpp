@@ -2,7 +2,12 @@
 // the fix (a user editing a scene file must not have to read the code).
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <limits>
+#include <stdexcept>
+
 #include "hapfluid/config/errors.hpp"
+#include "hapfluid/sim/finite_state.hpp"
 #include "test_support.hpp"
 
 using namespace hapfluid::sim;
@@ -114,5 +119,33 @@ density_kg_m3 = 500.0
                    "0.028 m): the body would be fewer than 3 particles across; use a sampling_spacing_m of at most "
                    "0.00933333 m"),
             std::string::npos)
+      << e;
+}
+
+// A run that diverges stops with the body, the quantity and its value named, and the keys that
+// would shorten the step: a rig owner reads this line, not a stack trace.
+TEST(BadScenes, ADivergedBodyIsNamedWithItsQuantityAndValue) {
+  const auto dir = test::temp_dir("diverged");
+  const auto scene = test::write_scene(dir, std::string(kBase) + R"(
+[[bodies]]
+name = "crate"
+mesh = "box.obj"
+position_m = [0.1, 0.1, 0.1]
+density_kg_m3 = 500.0
+)", {{"box.obj", test::box_mesh(0.1, 0.1, 0.1)}});
+  SimulationModel model = build_model(scene);
+  std::filesystem::remove_all(dir);
+  ASSERT_NO_THROW(check_finite_state(model, 0.25));
+  model.bodies[0].orientation.x = std::numeric_limits<double>::quiet_NaN();
+  std::string e;
+  try {
+    check_finite_state(model, 0.25);
+  } catch (const std::runtime_error& error) {
+    e = error.what();
+  }
+  EXPECT_EQ(e.rfind("simulation diverged at t = 0.25 s: body crate: orientation [1, nan, 0, 0] is not finite: lower "
+                    "time.cfl (",
+                    0),
+            0u)
       << e;
 }
