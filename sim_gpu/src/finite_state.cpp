@@ -61,8 +61,7 @@ void check_finite_state(const SimulationModel& m, double time_s) {
     const Quat& q = b.orientation;
     if (!finite(b.position)) diverged(time_s, what, "position", fmt(b.position.x, b.position.y, b.position.z) + " m", body_fix);
     if (!std::isfinite(q.w) || !finite3(q.x, q.y, q.z))
-      diverged(time_s, what, "orientation", fmt(q),
-               body_fix);
+      diverged(time_s, what, "orientation", fmt(q), body_fix);
     const Vec3 &v = b.linear_velocity, &w = b.angular_velocity;
     if (!finite(v)) diverged(time_s, what, "velocity", fmt(v.x, v.y, v.z) + " m/s", body_fix);
     if (!finite(w)) diverged(time_s, what, "angular velocity", fmt(w.x, w.y, w.z) + " rad/s", body_fix);

@@ -2,9 +2,9 @@
 // the cubic spline, the walls' volume map, the solve state and the per-workgroup sums.
 //
 // Per-particle passes run one invocation per cell-sorted fluid particle (workgroups of 64) and
-// sum their pair terms in the CPU's neighbour order (NEIGHBOUR_RUNS). Pair terms are evaluated
-// again in every pass rather than stored: a list of them costs more to write and read than the
-// kernel costs to evaluate.
+// sum their pair terms in the CPU's neighbour order: the density pass over the cells
+// (NEIGHBOUR_RUNS), which lists each particle's fluid neighbours with their pair gradients; every
+// later pass of the step reads that list (FOR_EACH_LISTED).
 #include "common.glsl"
 layout(local_size_x = 64) in;
 
