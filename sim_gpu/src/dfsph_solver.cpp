@@ -440,8 +440,7 @@ void DfsphSolver::start_density_coupling(double dt) {
     solve6(sys.a, sys.rhs, u.data());
     coupling_->start_solve(b, u);
   }
-  // The solve starts from u with no force of its own yet: only the body particles need it.
-  coupling_->write_particle_velocities(m_, body_view_);
+  // The body particles get the prediction at the solve's end: nothing reads them before.
 }
 
 void DfsphSolver::body_forces_and_step(double dt) {

@@ -48,7 +48,8 @@ uint list_capacity() { return uint(P.dfsph_d.x); }
 // neighbouring entries at every step of their loops.
 uint listed_at(uint k, uint n) { return n * P.counts.x + k; }
 #define FOR_EACH_LISTED(k) \
-  for (uint q_ = (k), e_ = q_ + min(uint(D_FIELD(k).w), list_capacity()) * P.counts.x; q_ < e_; q_ += P.counts.x)
+  for (uint q_ = listed_at(k, 0u), e_ = listed_at(k, min(uint(D_FIELD(k).w), list_capacity())); q_ < e_; \
+       q_ += P.counts.x)
 #define LISTED_PAIR vec4 listed_ = texelFetch(t_list, int(q_))
 #define LISTED_INDEX uint(listed_.w)
 #define LISTED_GRADIENT listed_.xyz
